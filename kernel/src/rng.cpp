@@ -84,7 +84,11 @@ real RngStream::uniform() {
 #endif
 }
 
-real RngStream::uniform(real lo, real hi) { return lo + (hi - lo) * uniform(); }
+real RngStream::uniform(real lo, real hi) {
+  const real r = lo + (hi - lo) * uniform();
+  // In float, lo + (hi - lo) * u can round up to hi for u just below 1.
+  return (r < hi || !(hi > lo)) ? r : std::nextafter(hi, lo);
+}
 
 real RngStream::normal() {
   // u1 in (0, 1] so log() is finite.

@@ -54,6 +54,7 @@ KTEST(Rng, SameKeySameSequenceDifferentStreamsDiffer) {
 
 KTEST(Rng, SeekIsRandomAccess) {
   RngStream a(1, 2, 3);
+  KEXPECT_EQ(a.position(), 0u);
   std::uint32_t seq[11];
   for (auto& v : seq) v = a.next_u32();
   for (int start = 0; start < 10; ++start) {
@@ -63,6 +64,8 @@ KTEST(Rng, SeekIsRandomAccess) {
     KEXPECT_EQ(b.next_u32(), seq[start + 1]);
   }
   KEXPECT_EQ(a.position(), 11u);
+  a.next_u32();
+  KEXPECT_EQ(a.position(), 12u);  // block boundary
 }
 
 KTEST(Rng, UniformAndNormalStatistics) {

@@ -37,7 +37,7 @@ class RngStream {
   std::uint32_t next_u32();
   /// Uniform in [0, 1) with 24 (float) or 53 (double) random bits; never returns 1.
   real uniform();
-  /// Uniform in [lo, hi).
+  /// Uniform in [lo, hi) (the rounding of lo + (hi - lo) u is kept below hi).
   real uniform(real lo, real hi);
   /// Standard normal N(0, 1) by the Box-Muller transform (Box & Muller 1958), one value per
   /// call (the sine branch is discarded, so a draw always consumes the same number of words).
@@ -45,7 +45,7 @@ class RngStream {
   real normal(real mean, real stddev) { return mean + stddev * normal(); }
 
   /// Number of 32-bit words drawn so far.
-  std::uint64_t position() const { return block_ * 4u + word_; }
+  std::uint64_t position() const { return block_ * 4u + word_ % 4u; }
   /// Jump to word index n (O(1)).
   void seek(std::uint64_t n);
 

@@ -1,0 +1,149 @@
+# Cortex-M images for the Arm MPS2 boards (QEMU): firmware executables and ktest images.
+# Included by platform/cortex-m/CMakeLists.txt in MCU builds (KESTREL_BOARD != host).
+#
+#   kestrel_add_mcu_executable(<name> SOURCES <src>... [LIBS <lib>...] [STACK_SIZE <bytes>]
+#                              [EXCLUDE_FROM_ALL] [NO_IMAGE_CHECK] [RUN] [TIMEOUT <s>])
+#     <name>.elf for KESTREL_BOARD: startup code, vector table, fault handlers, semihosting
+#     console (kestrel::platform), linker script ld/<board>.ld, no heap. Also <name>.elf.map.
+#     Registers the ctest <name>.image (check-image.sh: no heap symbols, flash/RAM use) unless
+#     NO_IMAGE_CHECK or EXCLUDE_FROM_ALL, and with RUN the ctest <name> that runs it under QEMU
+#     and passes if it exits 0 (main's return value).
+#
+#   kestrel_add_mcu_test(<name> SOURCES <src>... [LIBS <lib>...] [STACK_SIZE <bytes>] [TIMEOUT <s>])
+#     The same plus the ktest runner (tests/support/ktest_runner.cpp) and semihosting file access
+#     (tests/support/test_io_semihost.cpp), include dirs tests/support and tests/, and the ctest
+#     <name>: run-qemu.sh runs the image with the golden directory ($KESTREL_GOLDEN_DIR at test
+#     time, else KESTREL_GOLDEN_DIR_DEFAULT) as a semihosting argument and passes if QEMU exits 0
+#     and prints "<N> passed, 0 failed".
+#
+#   kestrel_add_qemu_test(<test> <image target> <argv0> <timeout s> [run-qemu.sh options...])
+#     Any other QEMU run of an image, e.g. `--expect-status 3 --expect-output "BusFault"`.
+#
+# No heap, enforced at link time: every link gets -Wl,--wrap=<sym> for each symbol in
+# platform/cortex-m/heap-symbols.txt (malloc, free, _sbrk, _malloc_r, operator new/delete, ...)
+# and no __wrap_<sym> exists, so a reference that survives --gc-sections is an
+# "undefined reference to `__wrap_malloc'" error. Code that never reaches the heap links as before.
+include_guard(GLOBAL)
+
+# The functions run in their callers' directory scopes (tests/, platform/, ...): everything they
+# need is kept in the cache (INTERNAL: recomputed at every configure).
+get_filename_component(_dir "${CMAKE_CURRENT_LIST_DIR}/../platform/cortex-m" ABSOLUTE)
+set(KESTREL_CORTEX_M_DIR "${_dir}" CACHE INTERNAL "")
+get_filename_component(_dir "${CMAKE_CURRENT_LIST_DIR}/../tests" ABSOLUTE)
+set(KESTREL_TESTS_DIR "${_dir}" CACHE INTERNAL "")
+set(KESTREL_TEST_SUPPORT_DIR "${_dir}/support" CACHE INTERNAL "")
+
+set(_boards mps2-an385 mps2-an386 mps2-an500)
+if(NOT KESTREL_BOARD IN_LIST _boards)
+  message(FATAL_ERROR "KESTREL_BOARD=${KESTREL_BOARD}: the Cortex-M port supports ${_boards}")
+endif()
+if(NOT CMAKE_SYSTEM_NAME STREQUAL "Generic" OR NOT CMAKE_SYSTEM_PROCESSOR STREQUAL "arm")
+  message(FATAL_ERROR "KESTREL_BOARD=${KESTREL_BOARD} needs the arm-none-eabi toolchain: configure with "
+                      "--preset cortex-m4f|cortex-m7|cortex-m3 or -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-<cpu>.cmake")
+endif()
+
+if(DEFINED KESTREL_QEMU_MACHINE AND NOT KESTREL_QEMU_MACHINE STREQUAL KESTREL_BOARD)
+  message(FATAL_ERROR "KESTREL_BOARD=${KESTREL_BOARD}, but the toolchain file compiles for ${KESTREL_QEMU_MACHINE}: "
+                      "pick the toolchain file of that board instead of setting KESTREL_BOARD")
+endif()
+
+set(KESTREL_MCU_LINKER_SCRIPT "${KESTREL_CORTEX_M_DIR}/ld/${KESTREL_BOARD}.ld" CACHE INTERNAL "")
+set(KESTREL_MCU_QEMU_MACHINE "${KESTREL_BOARD}" CACHE INTERNAL "")  # QEMU's machine names are the board names
+
+file(STRINGS "${KESTREL_CORTEX_M_DIR}/heap-symbols.txt" _lines)
+set(_syms "")
+foreach(_line IN LISTS _lines)
+  string(REGEX REPLACE "#.*" "" _line "${_line}")
+  string(STRIP "${_line}" _line)
+  if(_line)
+    list(APPEND _syms "${_line}")
+  endif()
+endforeach()
+list(TRANSFORM _syms PREPEND "-Wl,--wrap=")
+set(KESTREL_MCU_NO_HEAP_LINK_OPTIONS "${_syms}" CACHE INTERNAL "")
+
+find_program(KESTREL_QEMU_SYSTEM_ARM qemu-system-arm)
+if(NOT KESTREL_QEMU_SYSTEM_ARM)
+  message(WARNING "qemu-system-arm not found: the MCU images build, but their ctests will fail. "
+                  "Install it (Debian: apt-get install qemu-system-arm).")
+endif()
+if(NOT KESTREL_ARM_SIZE)
+  find_program(KESTREL_ARM_SIZE arm-none-eabi-size)
+endif()
+set(KESTREL_MCU_TEST_TIMEOUT 900 CACHE STRING "Seconds a QEMU run of an MCU test image may take")
+
+# ctest <test> running image target <image> under QEMU through run-qemu.sh, which reports a missing
+# QEMU with the package to install. ARGN: more run-qemu.sh options (--ktest, --expect-status ...).
+function(kestrel_add_qemu_test test image argv0 timeout)
+  set(qemu "${KESTREL_QEMU_SYSTEM_ARM}")
+  if(NOT qemu)
+    set(qemu qemu-system-arm)
+  endif()
+  add_test(NAME ${test}
+    COMMAND sh "${KESTREL_CORTEX_M_DIR}/run-qemu.sh" --qemu "${qemu}" --machine "${KESTREL_MCU_QEMU_MACHINE}"
+            --elf "$<TARGET_FILE:${image}>" --name "${argv0}" --golden-default "${KESTREL_GOLDEN_DIR_DEFAULT}"
+            --timeout ${timeout} ${ARGN})
+  math(EXPR ctest_timeout "${timeout} + 30")
+  set_tests_properties(${test} PROPERTIES LABELS "mcu;${KESTREL_BOARD}" TIMEOUT ${ctest_timeout})
+endfunction()
+
+function(kestrel_add_mcu_executable name)
+  cmake_parse_arguments(PARSE_ARGV 1 arg "EXCLUDE_FROM_ALL;NO_IMAGE_CHECK;RUN" "STACK_SIZE;TIMEOUT" "SOURCES;LIBS")
+  if(arg_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "kestrel_add_mcu_executable(${name}): unknown arguments ${arg_UNPARSED_ARGUMENTS}")
+  endif()
+  set(exclude "")
+  if(arg_EXCLUDE_FROM_ALL)
+    set(exclude EXCLUDE_FROM_ALL)
+  endif()
+  add_executable(${name} ${exclude} ${arg_SOURCES})
+  set_target_properties(${name} PROPERTIES SUFFIX ".elf")
+  # Objects of kestrel_cortex_m_runtime (startup, vector table, fault handlers, C/C++ runtime
+  # hooks) go straight onto the link line; kestrel_platform after the caller's libraries.
+  target_link_libraries(${name} PRIVATE ${arg_LIBS} kestrel_platform kestrel_cortex_m_runtime)
+  target_link_options(${name} PRIVATE
+    -nostartfiles
+    "-L${KESTREL_CORTEX_M_DIR}/ld" "-T${KESTREL_MCU_LINKER_SCRIPT}"
+    "-Wl,-Map=$<TARGET_FILE:${name}>.map"
+    ${KESTREL_MCU_NO_HEAP_LINK_OPTIONS})
+  if(arg_STACK_SIZE)
+    target_link_options(${name} PRIVATE "-Wl,--defsym=__stack_size=${arg_STACK_SIZE}")
+  endif()
+  set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS
+    "${KESTREL_MCU_LINKER_SCRIPT}" "${KESTREL_CORTEX_M_DIR}/ld/cortex-m-sections.ld"
+    "${KESTREL_CORTEX_M_DIR}/heap-symbols.txt")
+
+  if(NOT arg_NO_IMAGE_CHECK AND NOT arg_EXCLUDE_FROM_ALL)
+    add_test(NAME ${name}.image
+      COMMAND sh "${KESTREL_CORTEX_M_DIR}/check-image.sh" "${CMAKE_NM}" "${KESTREL_ARM_SIZE}"
+              "$<TARGET_FILE:${name}>" "${KESTREL_CORTEX_M_DIR}/heap-symbols.txt")
+    set_tests_properties(${name}.image PROPERTIES LABELS "mcu;${KESTREL_BOARD};image")
+  endif()
+  if(arg_RUN)
+    if(NOT arg_TIMEOUT)
+      set(arg_TIMEOUT ${KESTREL_MCU_TEST_TIMEOUT})
+    endif()
+    kestrel_add_qemu_test(${name} ${name} ${name} ${arg_TIMEOUT})
+  endif()
+endfunction()
+
+function(kestrel_add_mcu_test name)
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "STACK_SIZE;TIMEOUT" "SOURCES;LIBS")
+  if(arg_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "kestrel_add_mcu_test(${name}): unknown arguments ${arg_UNPARSED_ARGUMENTS}")
+  endif()
+  set(stack "")
+  if(arg_STACK_SIZE)
+    set(stack STACK_SIZE ${arg_STACK_SIZE})
+  endif()
+  if(NOT arg_TIMEOUT)
+    set(arg_TIMEOUT ${KESTREL_MCU_TEST_TIMEOUT})
+  endif()
+  kestrel_add_mcu_executable(${name} ${stack}
+    SOURCES ${arg_SOURCES} "${KESTREL_TEST_SUPPORT_DIR}/ktest_runner.cpp" "${KESTREL_TEST_SUPPORT_DIR}/test_io_semihost.cpp"
+    LIBS ${arg_LIBS})
+  # Without KESTREL_TEST_GTEST, ktest.hpp selects its own runner's macros.
+  target_include_directories(${name} PRIVATE "${KESTREL_TEST_SUPPORT_DIR}" "${KESTREL_TESTS_DIR}")
+  target_compile_definitions(${name} PRIVATE KESTREL_GOLDEN_DIR_DEFAULT="${KESTREL_GOLDEN_DIR_DEFAULT}")
+  kestrel_add_qemu_test(${name} ${name} ${name} ${arg_TIMEOUT} --ktest)
+endfunction()

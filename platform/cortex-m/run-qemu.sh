@@ -1,0 +1,72 @@
+#!/bin/sh
+# Runs a Kestrel MCU image under QEMU with semihosting and judges the result.
+#   run-qemu.sh --qemu <qemu-system-arm> --machine <mps2-anNNN> --elf <image.elf> --name <argv0>
+#               [--golden-default <dir>] [--timeout <seconds>] [--ktest]
+#               [--expect-status <n>] [--expect-output <extended regex>]
+# The golden directory passed to the image (second semihosting argument) is $KESTREL_GOLDEN_DIR
+# if set and non-empty, else --golden-default. -icount shift=0 makes timing deterministic: each
+# instruction advances virtual time by 1 ns (SysTick at 25 MHz: one tick per 40 instructions).
+# sleep=off: while the core idles (WFI) virtual time jumps to the next timer deadline instead of
+# following the host's clock, so a loop paced by SysTick runs as fast as QEMU can go and its
+# measurements repeat bit for bit (with the default sleep=on the firmware example took 12.5 s of
+# wall time for its 12 s flight and its per-step costs varied by a few instructions run to run).
+# Passes if QEMU exits 0 (the image's exit status, through semihosting SYS_EXIT; or the status
+# given with --expect-status), with --ktest the output has a line "<N> passed, 0 failed" with
+# N >= 1, and with --expect-output a line matches that regex. Extra QEMU options can be
+# given in $KESTREL_QEMU_EXTRA_ARGS (e.g. "-d unimp,guest_errors").
+set -u
+qemu=qemu-system-arm machine= elf= name=image golden_default= timeout=600 ktest=0 expect_status=0 expect_output=
+while [ $# -gt 0 ]; do
+  case $1 in
+    --qemu) qemu=$2; shift 2 ;;
+    --machine) machine=$2; shift 2 ;;
+    --elf) elf=$2; shift 2 ;;
+    --name) name=$2; shift 2 ;;
+    --golden-default) golden_default=$2; shift 2 ;;
+    --timeout) timeout=$2; shift 2 ;;
+    --ktest) ktest=1; shift ;;
+    --expect-status) expect_status=$2; shift 2 ;;
+    --expect-output) expect_output=$2; shift 2 ;;
+    *) echo "run-qemu: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+if ! command -v "$qemu" >/dev/null 2>&1; then
+  echo "run-qemu: $qemu not found; install it (Debian: apt-get install qemu-system-arm)" >&2
+  exit 1
+fi
+[ -f "$elf" ] || { echo "run-qemu: no such image: $elf" >&2; exit 1; }
+
+golden=${KESTREL_GOLDEN_DIR:-$golden_default}
+# -semihosting-config is a comma-separated option list: a literal comma is written ",,".
+esc() { printf '%s' "$1" | sed 's/,/,,/g'; }
+semi="enable=on,target=native,arg=$(esc "$name")"
+[ -n "$golden" ] && semi="$semi,arg=$(esc "$golden")"
+
+log=$(mktemp "${TMPDIR:-/tmp}/kestrel-qemu.XXXXXX")
+trap 'rm -f "$log"' EXIT INT TERM
+echo "run-qemu: $qemu -M $machine -nographic -semihosting-config $semi -icount shift=0,sleep=off -kernel $elf"
+start=$(date +%s)
+# shellcheck disable=SC2086  # KESTREL_QEMU_EXTRA_ARGS is a word list on purpose
+timeout -k 5 "$timeout" "$qemu" -M "$machine" -nographic -semihosting-config "$semi" \
+  -icount shift=0,sleep=off ${KESTREL_QEMU_EXTRA_ARGS:-} -kernel "$elf" </dev/null >"$log" 2>&1
+rc=$?
+end=$(date +%s)
+cat "$log"
+echo "run-qemu: exit status $rc after $((end - start)) s"
+if [ $rc -eq 124 ] || [ $rc -eq 137 ]; then
+  echo "run-qemu: FAIL: timed out after $timeout s" >&2
+  exit 1
+fi
+if [ $rc -ne "$expect_status" ]; then
+  echo "run-qemu: FAIL: the image exited with status $rc, expected $expect_status" >&2
+  exit 1
+fi
+if [ $ktest -eq 1 ] && ! grep -Eq '^[1-9][0-9]* passed, 0 failed(, [0-9]+ skipped)?$' "$log"; then
+  echo "run-qemu: FAIL: no '<N> passed, 0 failed' line in the output" >&2
+  exit 1
+fi
+if [ -n "$expect_output" ] && ! grep -Eq -- "$expect_output" "$log"; then
+  echo "run-qemu: FAIL: no line matches '$expect_output'" >&2
+  exit 1
+fi
+exit 0

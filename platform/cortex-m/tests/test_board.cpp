@@ -1,0 +1,153 @@
+// Board tests on the emulated MCU: SysTick against a known instruction count (the relation
+// board.hpp documents: 40 instructions per tick under -icount shift=0), systick_now() across
+// wraps, semihosting file reads in chunks.
+#include <cstdint>
+#include <cstring>
+
+#include "kestrel/platform/board.hpp"
+#include "kestrel/platform/console.hpp"
+#include "ktest.hpp"
+#include "test_io.hpp"
+
+namespace board = kestrel::platform::board;
+namespace con = kestrel::platform;
+
+namespace {
+
+// Exactly 2 instructions per iteration (subs; bne), whatever the compiler does around it.
+void spin(std::uint32_t iterations) {
+  asm volatile(
+      "1: subs %0, %0, #1\n"
+      "   bne 1b"
+      : "+r"(iterations)
+      :
+      : "cc");
+}
+
+std::uint64_t ticks_for(std::uint32_t iterations) {
+  board::TickRegion region;
+  spin(iterations);
+  return region.elapsed();
+}
+
+volatile std::uint32_t g_callbacks = 0;
+void count_callback() { g_callbacks = g_callbacks + 1; }
+
+void print_measure(const char* what, std::uint64_t v) {
+  con::print("  ");
+  con::print(what);
+  con::print(" ");
+  con::print_uint(v);
+  con::println();
+}
+
+}  // namespace
+
+KTEST(SysTick, FortyInstructionsPerTickUnderIcount) {
+  board::systick_start();  // max reload (16.7M ticks): no wrap within one region below
+  const std::uint32_t n1 = 1'000'000, n2 = 26'000'000;
+  const std::uint64_t empty = board::measure_ticks([] {});
+  const std::uint64_t t1 = ticks_for(n1);
+  const std::uint64_t t2 = ticks_for(n2);
+  board::systick_stop();
+  // The difference cancels the measurement overhead: 2 * (n2 - n1) = 50M instructions. A region's
+  // tick count depends on where in a tick it starts and ends, hence +-1 tick.
+  const std::uint64_t instructions = 2ull * (n2 - n1);
+  const std::uint64_t dt = t2 - t1;
+  print_measure("empty region, ticks:", empty);
+  print_measure("1M iterations (2M instructions), ticks:", t1);
+  print_measure("26M iterations (52M instructions), ticks:", t2);
+  print_measure("difference (50M instructions), ticks:", dt);
+  con::print("  instructions per tick: ");
+  con::print_fixed(static_cast<double>(instructions) / static_cast<double>(dt), 5);
+  con::println();
+  const std::uint64_t expected = instructions / board::kIcountInstructionsPerTick;  // 1'250'000
+  KEXPECT_GE(dt + 1, expected);
+  KEXPECT_LE(dt, expected + 1);
+  KEXPECT_GE(t1 + 1, 2ull * n1 / board::kIcountInstructionsPerTick);
+  KEXPECT_LE(t1, 2ull * n1 / board::kIcountInstructionsPerTick + 1);
+  KEXPECT_LE(board::ticks_to_instructions(empty), 40u);  // systick_now() costs < 1 tick
+}
+
+KTEST(SysTick, NowIsMonotonicAcrossWraps) {
+  g_callbacks = 0;
+  board::systick_start(999, &count_callback);  // wraps every 1000 ticks = 40000 instructions
+  std::uint64_t prev = board::systick_now();
+  bool monotonic = true;
+  for (int i = 0; i < 20000; ++i) {
+    const std::uint64_t now = board::systick_now();
+    if (now < prev) monotonic = false;
+    prev = now;
+  }
+  const std::uint64_t total = board::systick_now();
+  const std::uint32_t wraps = board::systick_wraps();
+  board::systick_stop();
+  print_measure("ticks:", total);
+  print_measure("wraps:", wraps);
+  KEXPECT_TRUE(monotonic);
+  KEXPECT_GE(wraps, 10u);
+  KEXPECT_EQ(g_callbacks, wraps);
+  KEXPECT_EQ(total / 1000u, wraps);
+}
+
+KTEST(Semihosting, ReadsAHostFileInChunksOfAnySize) {
+  // This very source file, read three ways: whole-buffer, 4 KiB chunks, 7-byte chunks.
+  static char whole[32768];
+  const int h = ktest::file_open(KESTREL_BOARD_TEST_SOURCE);
+  KASSERT_TRUE(h >= 0);
+  const long n = ktest::file_read(h, whole, sizeof(whole) - 1);
+  KEXPECT_EQ(ktest::file_read(h, whole, 16), 0);  // end of file
+  ktest::file_close(h);
+  KASSERT_TRUE(n > 1000 && n < static_cast<long>(sizeof(whole)) - 1);
+  whole[n] = '\0';
+  KEXPECT_TRUE(std::strstr(whole, "KTEST(Semihosting, ReadsAHostFileInChunksOfAnySize)") != nullptr);
+
+  const std::size_t chunks[] = {4096, 7};
+  for (std::size_t chunk : chunks) {
+    static char part[4096];
+    const int hc = ktest::file_open(KESTREL_BOARD_TEST_SOURCE);
+    KASSERT_TRUE(hc >= 0);
+    long total = 0;
+    bool same = true;
+    for (;;) {
+      const long got = ktest::file_read(hc, part, chunk);
+      if (got <= 0) break;
+      if (total + got > n || std::memcmp(part, whole + total, static_cast<std::size_t>(got)) != 0) same = false;
+      total += got;
+    }
+    ktest::file_close(hc);
+    KEXPECT_EQ(total, n);
+    KEXPECT_TRUE(same);
+  }
+  KEXPECT_EQ(ktest::file_open("/nonexistent/kestrel/file"), -1);
+}
+
+KTEST(Console, LongLinesAndNumbers) {
+  // More than one console buffer (256 bytes) in a single write, then formatted numbers.
+  static char line[600];
+  for (std::size_t i = 0; i + 1 < sizeof(line); ++i) line[i] = static_cast<char>('a' + i % 26);
+  line[sizeof(line) - 1] = '\0';
+  con::println(line);
+  con::print_sci(-1.2345678e-5, 5);
+  con::print(" ");
+  con::print_fixed(3.14159, 3);
+  con::println();
+  KEXPECT_TRUE(true);
+}
+
+KTEST(Board, DescribesItself) {
+  con::print("  board ");
+  con::print(board::kBoardName);
+  con::print(", ");
+  con::print(board::kCpuName);
+  con::print(board::kHasDoubleFpu ? ", double-precision FPU" : board::kHasFpu ? ", single-precision FPU" : ", no FPU");
+  con::println();
+  KEXPECT_TRUE(std::strncmp(board::kBoardName, "mps2-an", 7) == 0);
+  KEXPECT_TRUE(std::strncmp(board::kCpuName, "Cortex-M", 8) == 0);
+  KEXPECT_TRUE(board::kHasFpu || !board::kHasDoubleFpu);
+}
+
+KTEST(Stack, HighWaterMarkIsMeasured) {
+  KEXPECT_GT(board::stack_used_bytes(), 0u);
+  KEXPECT_LT(board::stack_used_bytes(), board::stack_size_bytes());
+}
