@@ -1,0 +1,233 @@
+// Scene instances, instance BVH and the two-level closest-hit query (see scene.hpp).
+#include "kestrel/sensors/scene.hpp"
+
+#include <cmath>
+
+#include "kestrel/kernel/quaternion.hpp"
+
+namespace kestrel::sensors {
+
+Scene::Scene(SceneObject* objects, std::uint32_t capacity, BvhNode* nodes, std::uint32_t node_capacity,
+             std::uint32_t* prim_index, Aabb* boxes, std::uint32_t* bvh_objects)
+    : objects_(objects), capacity_(capacity), boxes_(boxes), bvh_objects_(bvh_objects) {
+  bvh_.nodes = nodes;
+  bvh_.node_capacity = node_capacity;
+  bvh_.prim_index = prim_index;
+  bvh_.prim_capacity = capacity;
+}
+
+void Scene::clear() {
+  count_ = 0;
+  unbounded_count_ = 0;
+  dirty_ = true;
+}
+
+namespace {
+
+// Local-frame bounds of a shape.
+Aabb local_bounds(const Shape& s) {
+  Aabb b;
+  real h[3] = {0, 0, 0};
+  switch (s.type) {
+    case ShapeType::box: h[0] = s.size[0]; h[1] = s.size[1]; h[2] = s.size[2]; break;
+    case ShapeType::sphere: h[0] = h[1] = h[2] = s.size[0]; break;
+    case ShapeType::capsule: h[0] = h[1] = s.size[0]; h[2] = s.size[1] + s.size[0]; break;
+    case ShapeType::cylinder: h[0] = h[1] = s.size[0]; h[2] = s.size[1]; break;
+    case ShapeType::mesh: return s.mesh->bounds;
+    case ShapeType::height_field: return s.height_field->bounds;
+    case ShapeType::plane: return b;
+  }
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = -h[k];
+    b.hi[k] = h[k];
+  }
+  return b;
+}
+
+void update_world(SceneObject& o, const Vec3& p, const Quat& q_in) {
+  const Quat q = q_in.normalized();
+  const Mat3 r = rotation_matrix(q);
+  for (int i = 0; i < 3; ++i) {
+    o.p_w[i] = p[i];
+    for (int j = 0; j < 3; ++j) o.r_wl[3 * i + j] = r(i, j);
+  }
+  // World box of a rotated box: centre moves, half extents become |R| h (Arvo 1990).
+  o.box_w = Aabb{};
+  if (o.shape.type == ShapeType::plane) return;
+  const Aabb lb = local_bounds(o.shape);
+  for (int i = 0; i < 3; ++i) {
+    real c = o.p_w[i], e = 0;
+    for (int j = 0; j < 3; ++j) {
+      const real rij = o.r_wl[3 * i + j];
+      c += rij * lb.centroid(j);
+      e += std::fabs(rij) * (lb.hi[j] - lb.lo[j]) * 0.5_r;
+    }
+    o.box_w.lo[i] = c - e;
+    o.box_w.hi[i] = c + e;
+  }
+}
+
+bool shape_valid(const Shape& s) {
+  switch (s.type) {
+    case ShapeType::box: return s.size[0] > 0 && s.size[1] > 0 && s.size[2] > 0;
+    case ShapeType::sphere: return s.size[0] > 0;
+    case ShapeType::capsule:
+    case ShapeType::cylinder: return s.size[0] > 0 && s.size[1] >= 0;
+    case ShapeType::plane: return true;
+    case ShapeType::mesh: return s.mesh != nullptr && (s.mesh->triangle_count == 0 || s.mesh->bvh.node_count > 0);
+    case ShapeType::height_field: return s.height_field != nullptr && !s.height_field->bounds.empty();
+  }
+  return false;
+}
+
+}  // namespace
+
+Status Scene::add(const Shape& shape, const Vec3& position_w, const Quat& orientation_wl, std::uint32_t seg_id,
+                  std::uint32_t* id) {
+  if (count_ >= capacity_) return Status::capacity_exceeded;
+  if (!shape_valid(shape) || !position_w.allFinite() || !orientation_wl.coeffs().allFinite() ||
+      orientation_wl.norm() < 1e-6_r)
+    return Status::invalid_argument;
+  if (shape.type == ShapeType::plane) {
+    if (unbounded_count_ >= kMaxUnbounded) return Status::capacity_exceeded;
+    unbounded_[unbounded_count_++] = count_;
+  }
+  SceneObject& o = objects_[count_];
+  o.shape = shape;
+  o.seg_id = seg_id;
+  update_world(o, position_w, orientation_wl);
+  if (id != nullptr) *id = count_;
+  ++count_;
+  dirty_ = true;
+  return Status::ok;
+}
+
+Status Scene::set_pose(std::uint32_t id, const Vec3& position_w, const Quat& orientation_wl) {
+  if (id >= count_ || !position_w.allFinite() || !orientation_wl.coeffs().allFinite() || orientation_wl.norm() < 1e-6_r)
+    return Status::invalid_argument;
+  update_world(objects_[id], position_w, orientation_wl);
+  dirty_ = true;
+  return Status::ok;
+}
+
+Status Scene::build(const BvhBuildParams& params) {
+  std::uint32_t n = 0;
+  for (std::uint32_t i = 0; i < count_; ++i) {
+    if (objects_[i].shape.type == ShapeType::plane) continue;
+    boxes_[n] = objects_[i].box_w;
+    bvh_objects_[n] = i;
+    ++n;
+  }
+  const Status s = bvh_build(boxes_, n, params, bvh_);
+  dirty_ = s != Status::ok;
+  return s;
+}
+
+namespace {
+
+struct Best {
+  real t;
+  std::uint32_t object;
+  std::uint32_t prim;
+  real n_l[3];
+  bool found;
+};
+
+// (t, object, prim) lexicographic: the stable tie break.
+inline bool better(const Best& b, real t, std::uint32_t object, std::uint32_t prim) {
+  if (!b.found || t < b.t) return true;
+  if (t > b.t) return false;
+  return object < b.object || (object == b.object && prim < b.prim);
+}
+
+// Tests one object with the world ray moved into its local frame.
+inline void test_object(const SceneObject& ob, std::uint32_t id, const Ray& rw, real tmin, Best& best, real tmax) {
+  const real* r = ob.r_wl;
+  const real v[3] = {rw.o[0] - ob.p_w[0], rw.o[1] - ob.p_w[1], rw.o[2] - ob.p_w[2]};
+  // R^T v and R^T d (rigid: ranges are the same in both frames).
+  const real o[3] = {r[0] * v[0] + r[3] * v[1] + r[6] * v[2], r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
+                     r[2] * v[0] + r[5] * v[1] + r[8] * v[2]};
+  const real* dw = rw.d;
+  const real d[3] = {r[0] * dw[0] + r[3] * dw[1] + r[6] * dw[2], r[1] * dw[0] + r[4] * dw[1] + r[7] * dw[2],
+                     r[2] * dw[0] + r[5] * dw[1] + r[8] * dw[2]};
+  LocalHit h;
+  bool hit = false;
+  std::uint32_t prim = 0;
+  switch (ob.shape.type) {
+    case ShapeType::box: hit = intersect_box(o, d, ob.shape.size, tmin, tmax, h); break;
+    case ShapeType::sphere: hit = intersect_sphere(o, d, ob.shape.size[0], tmin, tmax, h); break;
+    case ShapeType::capsule: hit = intersect_capsule(o, d, ob.shape.size[0], ob.shape.size[1], tmin, tmax, h); break;
+    case ShapeType::cylinder: hit = intersect_cylinder(o, d, ob.shape.size[0], ob.shape.size[1], tmin, tmax, h); break;
+    case ShapeType::plane: hit = intersect_plane(o, d, tmin, tmax, h); break;
+    case ShapeType::mesh: {
+      const Ray rl = make_ray(o, d);
+      real t = tmax;
+      if (mesh_intersect(*ob.shape.mesh, rl, tmin, t, prim)) {
+        hit = true;
+        h.t = t;
+        mesh_triangle_normal(*ob.shape.mesh, prim, h.n);
+      }
+      break;
+    }
+    case ShapeType::height_field: {
+      const Ray rl = make_ray(o, d);
+      real t = tmax;
+      if (height_field_intersect(*ob.shape.height_field, rl, tmin, t, prim)) {
+        hit = true;
+        h.t = t;
+        height_field_triangle_normal(*ob.shape.height_field, prim, h.n);
+      }
+      break;
+    }
+  }
+  if (!hit || !better(best, h.t, id, prim)) return;
+  best.t = h.t;
+  best.object = id;
+  best.prim = prim;
+  real n[3] = {h.n[0], h.n[1], h.n[2]};
+  if (ob.shape.type == ShapeType::mesh || ob.shape.type == ShapeType::height_field) {
+    // Surfaces without an inside: report the face the sensor sees.
+    if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0) {
+      n[0] = -n[0];
+      n[1] = -n[1];
+      n[2] = -n[2];
+    }
+  }
+  best.n_l[0] = n[0];
+  best.n_l[1] = n[1];
+  best.n_l[2] = n[2];
+  best.found = true;
+}
+
+}  // namespace
+
+bool Scene::intersect(const Vec3& o_w, const Vec3& d_w, real tmin, real tmax, SceneHit& hit) const {
+  const real o[3] = {o_w[0], o_w[1], o_w[2]};
+  const real d[3] = {d_w[0], d_w[1], d_w[2]};
+  return intersect(make_ray(o, d), tmin, tmax, hit);
+}
+
+bool Scene::intersect(const Ray& ray, real tmin, real tmax, SceneHit& hit) const {
+  if (dirty_) return false;
+  Best best{tmax, 0, 0, {0, 0, 0}, false};
+  for (std::uint32_t k = 0; k < unbounded_count_; ++k)
+    test_object(objects_[unbounded_[k]], unbounded_[k], ray, tmin, best, best.t);
+  real t = best.t;
+  bvh_traverse(bvh_, ray, tmin, t, [&](std::uint32_t prim, real tcur) {
+    const std::uint32_t id = bvh_objects_[prim];
+    test_object(objects_[id], id, ray, tmin, best, tcur);
+    return best.found ? best.t : tcur;
+  });
+  if (!best.found) return false;
+  const SceneObject& ob = objects_[best.object];
+  const real* r = ob.r_wl;
+  hit.t = best.t;
+  for (int i = 0; i < 3; ++i) hit.normal_w[i] = r[3 * i] * best.n_l[0] + r[3 * i + 1] * best.n_l[1] + r[3 * i + 2] * best.n_l[2];
+  hit.object = best.object;
+  hit.prim = best.prim;
+  hit.seg_id = ob.seg_id;
+  if (ob.shape.type == ShapeType::mesh && ob.shape.mesh->part_ids != nullptr) hit.seg_id = ob.shape.mesh->part_ids[best.prim];
+  return true;
+}
+
+}  // namespace kestrel::sensors

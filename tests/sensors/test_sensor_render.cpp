@@ -1,0 +1,273 @@
+// Sensor outputs: lidar ranges in a closed room (exact), point clouds in sensor and world frames,
+// out-of-range and normalisation rules, the camera's planar depth, segmentation, noise statistics
+// from fixed seeds, mounting and the IMU model.
+#include <cmath>
+
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sensors/imu.hpp"
+#include "kestrel/sensors/ray_sensor.hpp"
+#include "ktest.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sensors;
+
+namespace {
+
+SceneStorage<8> g_storage;
+constexpr std::uint32_t kMaxRays = 32 * 64;
+real g_dirs[3 * kMaxRays], g_scale[kMaxRays], g_range[kMaxRays], g_points[3 * kMaxRays];
+std::int32_t g_seg[kMaxRays];
+const Quat kIdentity = Quat::Identity();
+
+}  // namespace
+
+KTEST(SensorRender, LidarInsideSphereReadsRadiusEverywhere) {
+  Scene s(g_storage);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::sphere(4), Vec3(1, 2, 3), kIdentity, 9)), 0);
+  KASSERT_EQ(static_cast<int>(s.build()), 0);
+  LidarParams p = lidar_preset_osdome_64();
+  p.height = 16;
+  p.width = 32;
+  RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
+  KASSERT_EQ(static_cast<int>(lidar_rays(p, t)), 0);
+  SensorPose pose;
+  pose.position_w = Vec3(1, 2, 3);
+  pose.orientation_ws = quat_from_euler_xyz(0.3_r, -0.2_r, 1.1_r);
+  SensorOutput out;
+  out.range = g_range;
+  out.segmentation = g_seg;
+  out.points = g_points;
+  Status st = Status::invalid_argument;
+  KEXPECT_NO_HEAP(st = render(s, pose, t, p.range, false, out));
+  KASSERT_EQ(static_cast<int>(st), 0);
+  for (std::uint32_t i = 0; i < 16 * 32; ++i) {
+    KEXPECT_NEAR(g_range[i], 4, 2e-5);
+    KEXPECT_EQ(g_seg[i], 9);
+    // Sensor-frame point = range x sensor-frame direction.
+    for (int k = 0; k < 3; ++k) KEXPECT_NEAR(g_points[3 * i + k], 4 * g_dirs[3 * i + k], 1e-4);
+  }
+}
+
+KTEST(SensorRender, FramesOutOfRangeAndNormalisation) {
+  // A wall at world x = 3 (box face), sensor at the origin yawed +90 deg: the wall is to its right.
+  Scene s(g_storage);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::box(0.5_r, 50, 50), Vec3(3.5_r, 0, 0), kIdentity, 4)), 0);
+  KASSERT_EQ(static_cast<int>(s.build()), 0);
+  LidarParams p = lidar_preset_osdome_64();
+  p.height = 1;
+  p.width = 5;  // azimuth 180, 90, 0, -90, -180 deg at elevation 0
+  p.vertical_fov_deg_min = p.vertical_fov_deg_max = 0;
+  RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
+  KASSERT_EQ(static_cast<int>(lidar_rays(p, t)), 0);
+  SensorPose pose;
+  pose.orientation_ws = quat_from_euler_xyz(0, 0, kPi / 2);
+  SensorOutput out;
+  out.range = g_range;
+  out.points = g_points;
+  out.points_in_world_frame = true;
+  p.range.normalize_range = false;
+  p.range.set_default_out_of_range_values();
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, p.range, false, out)), 0);
+  // Column 3: azimuth -90 deg in the sensor = world +x -> the wall at 3 m.
+  KEXPECT_NEAR(g_range[3], 3, 1e-5);
+  KEXPECT_NEAR(g_points[9], 3, 1e-5);
+  KEXPECT_NEAR(g_points[10], 0, 1e-5);
+  // Others see nothing: -1 without normalisation.
+  KEXPECT_EQ(g_range[0], -1);
+  KEXPECT_EQ(g_range[2], -1);
+  // Normalised: hit 3/20, no hit 1.0; too near -1.0.
+  p.range.normalize_range = true;
+  p.range.set_default_out_of_range_values();
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, p.range, false, out)), 0);
+  KEXPECT_NEAR(g_range[3], 3.0 / 20.0, 1e-6);
+  KEXPECT_EQ(g_range[2], 1);
+  p.range.min_range = 3.5_r;
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, p.range, false, out)), 0);
+  KEXPECT_EQ(g_range[3], -1);
+  // Max range below the wall: a miss.
+  p.range.min_range = 0.5_r;
+  p.range.max_range = 2.5_r;
+  p.range.set_default_out_of_range_values();
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, p.range, false, out)), 0);
+  KEXPECT_EQ(g_range[3], 1);
+}
+
+KTEST(SensorRender, CameraDepthIsPlanarAndRangeIsAlongTheRay) {
+  // Wall 4 m in front of a camera looking along world +x; depth is measured along the principal
+  // ray of pixel (W/2, H/2) (golden quirk 11), so on a wall perpendicular to the optical axis
+  // depth = 4 / (principal . axis) everywhere... exactly t * scale with t = 4 / cos(angle to axis).
+  Scene s(g_storage);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::box(0.5_r, 50, 50), Vec3(4.5_r, 0, 0), kIdentity, 3)), 0);
+  KASSERT_EQ(static_cast<int>(s.build()), 0);
+  CameraParams cp = camera_preset_base();
+  cp.height = 18;
+  cp.width = 32;
+  RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
+  KASSERT_EQ(static_cast<int>(camera_rays(cp, t)), 0);
+  SensorPose pose;
+  SensorOutput out;
+  out.range = g_range;
+  out.segmentation = g_seg;
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, cp.range, true, out)), 0);
+  for (std::uint32_t i = 0; i < 18 * 32; ++i) {
+    const real x = g_dirs[3 * i];  // forward component = cos(angle to the optical axis)
+    KEXPECT_NEAR(g_range[i], 4 / x * g_scale[i], 2e-5);
+    KEXPECT_EQ(g_seg[i], 3);
+  }
+  // Pixel (W/2, H/2) is the principal pixel with an even H: it lies on the optical axis.
+  KEXPECT_NEAR(g_range[9 * 32 + 16], 4, 1e-5);
+  // Range mode.
+  cp.calculate_depth = false;
+  KASSERT_EQ(static_cast<int>(camera_rays(cp, t)), 0);
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, cp.range, false, out)), 0);
+  KEXPECT_NEAR(g_range[0], 4 / g_dirs[0], 2e-5);
+  // Sensor-frame convention: column 0 looks left (+y), row 0 looks up (+z).
+  KEXPECT_GT(g_dirs[1], 0);
+  KEXPECT_GT(g_dirs[2], 0);
+}
+
+KTEST(SensorRender, DirtySceneAndBadTableAreRefused) {
+  Scene s(g_storage);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::sphere(1), Vec3(3, 0, 0), kIdentity, 1)), 0);
+  RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
+  LidarParams p = lidar_preset_vl53l5cx();
+  KASSERT_EQ(static_cast<int>(lidar_rays(p, t)), 0);
+  SensorOutput out;
+  out.range = g_range;
+  KEXPECT_EQ(static_cast<int>(render(s, SensorPose{}, t, p.range, false, out)), static_cast<int>(Status::invalid_argument));
+  RayTable small{g_dirs, g_scale, 10, 0, 0};
+  KEXPECT_EQ(static_cast<int>(lidar_rays(p, small)), static_cast<int>(Status::capacity_exceeded));
+}
+
+KTEST(SensorRender, NoiseStatisticsFromFixedSeed) {
+  // Range-dependent model at r = 5: std = 0.01 * 25 + 0.02 * 5 + 0.05 = 0.4, offset 0.1.
+  NoiseParams np;
+  np.model = NoiseParams::Model::range_dependent;
+  np.a = 0.01_r;
+  np.b = 0.02_r;
+  np.c = 0.05_r;
+  np.offset = 0.1_r;
+  np.pixel_dropout_prob = 0.1_r;
+  np.dropout_value = 0;
+  constexpr std::uint32_t n = kMaxRays;
+  for (std::uint32_t i = 0; i < n; ++i) g_range[i] = 5;
+  RngStream rng(42, 0, kPurposeSensorNoise);
+  KEXPECT_NO_HEAP(apply_noise(np, g_range, n, rng));
+  double sum = 0, sum2 = 0;
+  int kept = 0, dropped = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (g_range[i] == 0) {
+      ++dropped;
+      continue;
+    }
+    sum += static_cast<double>(g_range[i]);
+    sum2 += static_cast<double>(g_range[i]) * static_cast<double>(g_range[i]);
+    ++kept;
+  }
+  const double mean = sum / kept, sd = std::sqrt(sum2 / kept - mean * mean);
+  // 2048 samples: standard error of the mean 0.4 / 45 = 0.009; of the sd ~0.0063.
+  KEXPECT_NEAR(mean, 5.1, 0.03);
+  KEXPECT_NEAR(sd, 0.4, 0.025);
+  KEXPECT_NEAR(static_cast<double>(dropped) / n, 0.1, 0.02);
+  // Same seed, same values (determinism); multiplier model scales with the value.
+  for (std::uint32_t i = 0; i < n; ++i) g_points[i] = 5;
+  RngStream rng2(42, 0, kPurposeSensorNoise);
+  apply_noise(np, g_points, n, rng2);
+  for (std::uint32_t i = 0; i < n; ++i) KEXPECT_EQ(g_points[i], g_range[i]);
+  NoiseParams mp;
+  mp.model = NoiseParams::Model::multiplier;
+  mp.std_dev_multiplier = 0.02_r;
+  for (std::uint32_t i = 0; i < n; ++i) g_range[i] = 10;
+  RngStream rng3(7, 1, kPurposeSensorNoise);
+  apply_noise(mp, g_range, n, rng3);
+  sum = sum2 = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    sum += static_cast<double>(g_range[i]);
+    sum2 += static_cast<double>(g_range[i]) * static_cast<double>(g_range[i]);
+  }
+  const double m2 = sum / n;
+  KEXPECT_NEAR(m2, 10, 0.015);
+  KEXPECT_NEAR(std::sqrt(sum2 / n - m2 * m2), 0.2, 0.015);
+}
+
+KTEST(SensorRender, MountingNominalAndRandomised) {
+  MountParams mp;
+  mp.nominal_position_b = Vec3(0.1_r, 0, 0.05_r);
+  mp.nominal_euler_deg = Vec3(0, 30, 0);
+  RngStream rng(3, 5, kPurposePlacement);
+  Mount m = sample_mount(mp, rng);
+  RigidBodyState body;
+  body.position_w = Vec3(1, 2, 3);
+  body.orientation_wb = quat_from_euler_xyz(0, 0, kPi / 2);
+  const SensorPose sp = sensor_pose(body, m);
+  KEXPECT_NEAR(sp.position_w[0], 1, 1e-6);
+  KEXPECT_NEAR(sp.position_w[1], 2.1, 1e-6);
+  KEXPECT_NEAR(sp.position_w[2], 3.05, 1e-6);
+  // Pitched 30 deg down (positive pitch about y tilts x toward -z), then yawed to world +y.
+  const Vec3 fwd = rotate(sp.orientation_ws, Vec3(1, 0, 0));
+  KEXPECT_NEAR(fwd[1], std::cos(kPi / 6), 1e-6);
+  KEXPECT_NEAR(fwd[2], -0.5, 1e-6);
+  mp.randomize_placement = true;
+  mp.min_translation_b = Vec3(-0.1_r, -0.1_r, 0);
+  mp.max_translation_b = Vec3(0.1_r, 0.1_r, 0.02_r);
+  mp.min_euler_deg = Vec3(-5, -5, -5);
+  mp.max_euler_deg = Vec3(5, 5, 5);
+  for (int k = 0; k < 50; ++k) {
+    m = sample_mount(mp, rng);
+    KEXPECT_TRUE(m.position_b[0] >= -0.1_r && m.position_b[0] < 0.1_r);
+    KEXPECT_TRUE(m.position_b[2] >= 0 && m.position_b[2] < 0.02_r);
+    const Vec3 e = euler_xyz(m.orientation_bs) * (180 / kPi);
+    for (int a = 0; a < 3; ++a) KEXPECT_LE(std::fabs(e[a]), 5.0001);
+  }
+}
+
+KTEST(SensorImu, HoverGravityBiasNoiseAndSaturation) {
+  ImuParams p;  // noise and bias off first: exact physics
+  p.enable_noise = false;
+  p.enable_bias = false;
+  ImuState s;
+  RngStream rng(1, 0, kPurposeSensorNoise);
+  imu_reset(p, s, rng);
+  ImuSample out;
+  // Hovering, level: specific force +g along z; gyro reads the body rate.
+  KASSERT_EQ(static_cast<int>(imu_update(p, s, kIdentity, Vec3::Zero(), Vec3(0.1_r, 0, 0), kIdentity, 0.005_r, rng, out)), 0);
+  KEXPECT_NEAR(out.accel_s[2], 9.81, 1e-5);
+  KEXPECT_NEAR(out.gyro_s[0], 0.1, 1e-7);
+  // Rolled 90 deg: gravity appears along body y.
+  KASSERT_EQ(static_cast<int>(imu_update(p, s, quat_from_euler_xyz(kPi / 2, 0, 0), Vec3::Zero(), Vec3::Zero(), kIdentity,
+                                         0.005_r, rng, out)), 0);
+  KEXPECT_NEAR(out.accel_s[1], 9.81, 1e-5);
+  KEXPECT_NEAR(out.accel_s[2], 0, 1e-5);
+  // Gravity compensation: free fall reads -g; compensated reads the kinematic acceleration.
+  p.gravity_compensation = true;
+  KASSERT_EQ(static_cast<int>(imu_update(p, s, kIdentity, Vec3(0, 0, -9.81_r), Vec3::Zero(), kIdentity, 0.005_r, rng, out)), 0);
+  KEXPECT_NEAR(out.accel_s[2], -9.81, 1e-5);
+  // Saturation.
+  p.gravity_compensation = false;
+  p.gyro_saturation = 1;
+  KASSERT_EQ(static_cast<int>(imu_update(p, s, kIdentity, Vec3::Zero(), Vec3(0, 0, 3), kIdentity, 0.005_r, rng, out)), 0);
+  KEXPECT_EQ(out.gyro_s[2], 1);
+  KEXPECT_TRUE(out.saturated);
+  // White-noise statistics of the BMI088 preset gyro at 200 Hz (bias walk off).
+  ImuParams b = imu_preset_bmi088();
+  b.enable_bias = false;
+  RngStream r2(11, 3, kPurposeSensorNoise);
+  double sum = 0, sum2 = 0;
+  const int n = 2000;
+  for (int k = 0; k < n; ++k) {
+    KASSERT_EQ(static_cast<int>(imu_update(b, s, kIdentity, Vec3::Zero(), Vec3::Zero(), kIdentity, 0.005_r, r2, out)), 0);
+    sum += static_cast<double>(out.gyro_s[0]);
+    sum2 += static_cast<double>(out.gyro_s[0]) * static_cast<double>(out.gyro_s[0]);
+  }
+  const double expected_sd = static_cast<double>(b.gyro_noise_density) / std::sqrt(0.005);
+  const double m = sum / n;
+  KEXPECT_NEAR(std::sqrt(sum2 / n - m * m), expected_sd, 0.05 * expected_sd);
+  KEXPECT_NEAR(m, 0, 4 * expected_sd / std::sqrt(static_cast<double>(n)));
+  // Initial bias within its range; dt <= 0 is an error.
+  ImuParams v = imu_preset_vn100();
+  RngStream r3(5, 0, kPurposeSensorNoise);
+  imu_reset(v, s, r3);
+  for (int k = 0; k < 3; ++k) KEXPECT_LE(std::fabs(s.gyro_bias_s[k]), v.gyro_initial_bias_max);
+  KEXPECT_EQ(static_cast<int>(imu_update(v, s, kIdentity, Vec3::Zero(), Vec3::Zero(), kIdentity, 0, r3, out)),
+             static_cast<int>(Status::invalid_argument));
+}
