@@ -1,0 +1,100 @@
+// Minimal images for the flash / static-RAM figures of the control stack (run-mcu-bench.sh takes
+// arm-none-eabi-size of each and subtracts the empty image, which has the same startup code,
+// vector table and runtime):
+//   KESTREL_STACK_EMPTY    main() only;
+//   KESTREL_STACK_CASCADE  Lee position -> sequential desaturation -> motor model of the quad,
+//                          built at start-up (pseudo-inverse included), stepped from volatile
+//                          inputs: the control stack of the firmware example without its plant
+//                          and printing;
+//   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable).
+// Nothing is printed: the console and its number formatting would count as control stack.
+#include <cstdint>
+
+#if !defined(KESTREL_STACK_EMPTY)
+#include "kestrel/allocation/airframe.hpp"
+#include "kestrel/allocation/allocation_model.hpp"
+#include "kestrel/allocation/motor_model.hpp"
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/allocation/sequential_desaturation.hpp"
+#include "kestrel/controllers/lee.hpp"
+#include "kestrel/kestrel.h"
+#endif
+
+namespace {
+volatile float g_in[13];   // state estimate [p v q w] written by "the estimator"
+volatile float g_out[12];  // motor thrusts read by "the ESC driver"
+volatile std::uint32_t g_steps = 3;
+}  // namespace
+
+#if defined(KESTREL_STACK_CASCADE)
+namespace {
+namespace al = kestrel::allocation;
+struct Stack {
+  kestrel::LeeParams lee;
+  kestrel::LeeState lee_state;
+  al::AllocationModel model;
+  al::AllocatorState alloc_state;
+  al::SequentialDesaturationParams desat;
+  al::AllocationResult alloc_out;
+  al::MotorModelState motors;
+};
+Stack g_stack;
+al::Airframe g_airframe;  // only needed to build the model
+}  // namespace
+
+int main() {
+  using namespace kestrel;
+  Stack& s = g_stack;
+  s.lee = lee_params_base_quadrotor();
+  lee_reset(s.lee, s.lee_state);
+  if (al::make_airframe(al::kBaseQuadrotor, g_airframe) != Status::ok) return 1;
+  if (al::build_allocation_model(g_airframe, s.model) == Status::invalid_argument) return 1;
+  al::reset_allocator(s.alloc_state);
+  RngStream rng(1, 0, kPurposeMotors);
+  const real idle[al::kMaxRotors] = {};
+  if (al::motor_model_reset(al::kBaseQuadrotorMotors, s.motors, rng, idle) != Status::ok) return 1;
+  for (std::uint32_t k = 0; k < g_steps; ++k) {
+    real in[13];
+    for (int i = 0; i < 13; ++i) in[i] = g_in[i];
+    RigidBodyState b;
+    b.position_w = Vec3(in[0], in[1], in[2]);
+    b.linvel_w = Vec3(in[3], in[4], in[5]);
+    b.orientation_wb = Quat(in[9], in[6], in[7], in[8]);
+    if (k == 0) b.orientation_wb = Quat::Identity();
+    b.angvel_b = Vec3(in[10], in[11], in[12]);
+    const real cmd[4] = {0, 0, 1, 0};
+    const Wrench w = update_lee_position(s.lee, s.lee_state, b, cmd);
+    (void)al::allocate_sequential_desaturation(s.model, s.desat, s.alloc_state, w, s.alloc_out);
+    (void)al::motor_model_step(al::kBaseQuadrotorMotors, s.motors, s.alloc_out.thrust_N, 0.002_r);
+    for (int i = 0; i < 4; ++i) g_out[i] = s.motors.thrust_N[i];
+  }
+  return 0;
+}
+#elif defined(KESTREL_STACK_CAPI)
+namespace {
+kestrel_storage g_storage;
+}
+int main() {
+  if (kestrel_init(&g_storage, KESTREL_PRESET_BASE_QUADROTOR) != KESTREL_OK) return 1;
+  for (std::uint32_t k = 0; k < g_steps; ++k) {
+    kestrel_state st;
+    for (int i = 0; i < 3; ++i) {
+      st.position_w[i] = g_in[i];
+      st.linvel_w[i] = g_in[3 + i];
+      st.angvel_b[i] = g_in[10 + i];
+    }
+    for (int i = 0; i < 4; ++i) st.orientation_xyzw[i] = g_in[6 + i];
+    st.orientation_xyzw[3] = 1.0f;
+    const kestrel_setpoint sp = {KESTREL_MODE_POSITION, {0.0f, 0.0f, 1.0f, 0.0f}};
+    kestrel_output out;
+    (void)kestrel_step(&g_storage, &st, &sp, 0.002f, &out);
+    for (int i = 0; i < 4; ++i) g_out[i] = out.motor_command[i];
+  }
+  return 0;
+}
+#else
+int main() {
+  for (std::uint32_t k = 0; k < g_steps; ++k) g_out[0] = g_in[0];
+  return 0;
+}
+#endif

@@ -1,0 +1,62 @@
+#!/bin/sh
+# Runs the deterministic control benchmark of one Cortex-M build tree under QEMU and writes
+#   bench/results/<target>/control.csv  instructions per call + painted stack bytes per function
+#   bench/results/<target>/memory.csv   flash / static RAM of the control stack (minimal images)
+#
+#   bench/control/run-mcu-bench.sh <mcu build dir> <target name, e.g. cortex-m4f>
+#
+# The build dir is a configured Cortex-M tree (e.g. build/host/mcu-cortex-m4f, which the host
+# preset builds, or cmake --preset cortex-m4f); this script builds the bench images in it.
+# Determinism check: the image is run twice and the two outputs must be byte-identical (under
+# -icount shift=0,sleep=off QEMU is a deterministic machine); the image itself also fails if a
+# measurement repeated in the same run differs by more than one SysTick tick.
+set -eu
+root=$(cd "$(dirname "$0")/../.." && pwd)
+build=${1:?usage: run-mcu-bench.sh <mcu build dir> <target>}
+target=${2:?usage: run-mcu-bench.sh <mcu build dir> <target>}
+build=$(cd "$build" && pwd)
+out="$root/bench/results/$target"
+mkdir -p "$out"
+
+cmake --build "$build" -j 2 --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade kestrel_stack_capi
+machine=$(sed -n 's/^KESTREL_BOARD:[A-Z]*=//p' "$build/CMakeCache.txt")
+qemu=${QEMU:-qemu-system-arm}
+elf="$build/bench/control-mcu/kestrel_control_bench.elf"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for run in 1 2; do
+  sh "$root/platform/cortex-m/run-qemu.sh" --qemu "$qemu" --machine "$machine" --elf "$elf" \
+     --name kestrel_control_bench --timeout 300 \
+     --expect-output "determinism: every measurement repeated within one tick" > "$tmp/run$run.txt" 2>&1 || {
+    cat "$tmp/run$run.txt"; echo "run-mcu-bench: the bench image failed" >&2; exit 1; }
+  # Only the image's own output (run-qemu.sh adds lines with timings of the host).
+  grep -v '^run-qemu:' "$tmp/run$run.txt" > "$tmp/out$run.txt"
+done
+if ! cmp -s "$tmp/out1.txt" "$tmp/out2.txt"; then
+  diff "$tmp/out1.txt" "$tmp/out2.txt" || true
+  echo "run-mcu-bench: FAIL: two runs of the same image gave different figures" >&2
+  exit 1
+fi
+echo "run-mcu-bench: deterministic: two runs identical"
+sed -n '/^csv-begin$/,/^csv-end$/p' "$tmp/out1.txt" | sed '1d;$d' > "$out/control.csv"
+
+size=${ARM_SIZE:-arm-none-eabi-size}
+# Flash = text + data, static RAM = data + bss without the linker-reserved main stack and its
+# guard (.stack is NOLOAD, counted in bss by size -B; take it from the section table instead).
+mem() {
+  f="$build/bench/control-mcu/kestrel_stack_$1.elf"
+  set -- $("$size" -B "$f" | tail -n 1)
+  text=$1 data=$2 bss=$3
+  stack=$("$size" -A "$f" | awk '$1 == ".stack" { print $2 }')
+  echo "$text $data $((bss - ${stack:-0}))"
+}
+set -- $(mem empty); e_text=$1 e_data=$2 e_bss=$3
+{
+  echo "image,text_bytes,data_bytes,bss_bytes,flash_bytes,static_ram_bytes,flash_minus_empty,static_ram_minus_empty"
+  for img in empty cascade capi; do
+    set -- $(mem $img)
+    echo "$img,$1,$2,$3,$(($1 + $2)),$(($2 + $3)),$(($1 + $2 - e_text - e_data)),$(($2 + $3 - e_data - e_bss))"
+  done
+} > "$out/memory.csv"
+echo "run-mcu-bench: wrote $out/control.csv and $out/memory.csv"
+cat "$out/control.csv" "$out/memory.csv"

@@ -1,0 +1,239 @@
+// C API over the control stack (kestrel/kestrel.h). Thin glue: every number comes from the core;
+// this file only converts between the C structs and the core types and lays the stack out in the
+// caller's storage (placement new into kestrel_storage, no heap).
+#include "kestrel/kestrel.h"
+
+#include <new>
+
+#include "kestrel/allocation/airframe.hpp"
+#include "kestrel/allocation/allocation_model.hpp"
+#include "kestrel/allocation/motor_model.hpp"
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/allocation/sequential_desaturation.hpp"
+#include "kestrel/controllers/controller.hpp"
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+
+namespace {
+
+using namespace kestrel;
+namespace al = kestrel::allocation;
+
+constexpr std::uint32_t kMagic = 0x4b455354u;  // "KEST": the storage holds an initialised stack
+
+struct CapiStack {
+  std::uint32_t magic;
+  bool use_motor_model;
+  ControllerParams ctrl;
+  ControllerState ctrl_state;
+  al::Airframe airframe;
+  al::MotorHealth health;
+  al::AllocationModel model;
+  al::AllocatorState alloc_state;
+  al::SequentialDesaturationParams desat;
+  al::AllocationResult alloc_out;
+  al::MotorModelConfig motor_cfg;
+  al::MotorModelState motors;
+};
+static_assert(sizeof(CapiStack) <= KESTREL_STORAGE_BYTES, "raise KESTREL_STORAGE_BYTES in kestrel.h");
+static_assert(alignof(CapiStack) <= alignof(kestrel_storage), "kestrel_storage is under-aligned");
+static_assert(static_cast<int>(KESTREL_MODE_POSITION) == static_cast<int>(ControllerKind::lee_position) &&
+                  static_cast<int>(KESTREL_MODE_VELOCITY) == static_cast<int>(ControllerKind::lee_velocity) &&
+                  static_cast<int>(KESTREL_MODE_ATTITUDE) == static_cast<int>(ControllerKind::lee_attitude) &&
+                  static_cast<int>(KESTREL_MODE_RATES) == static_cast<int>(ControllerKind::lee_rates),
+              "kestrel_mode values are ControllerKind values");
+static_assert(KESTREL_FAULT_NON_FINITE_OUTPUT == kFaultNonFiniteOutput && KESTREL_FAULT_MOTOR_FAILURE == kFaultMotorFailure &&
+                  KESTREL_FAULT_SATURATED == kFaultSaturated,
+              "fault bits are kestrel::Fault values");
+static_assert(KESTREL_MAX_MOTORS == al::kMaxRotors, "KESTREL_MAX_MOTORS is kMaxRotors");
+static_assert(static_cast<int>(KESTREL_NOT_CONVERGED) == static_cast<int>(Status::not_converged), "status values");
+
+kestrel_status to_c(Status s) { return static_cast<kestrel_status>(static_cast<int>(s)); }
+
+CapiStack* stack_of(kestrel_storage* s) {
+  if (s == nullptr) return nullptr;
+  CapiStack* p = std::launder(reinterpret_cast<CapiStack*>(s->u.bytes));
+  return p->magic == kMagic ? p : nullptr;
+}
+const CapiStack* stack_of(const kestrel_storage* s) {
+  if (s == nullptr) return nullptr;
+  const CapiStack* p = std::launder(reinterpret_cast<const CapiStack*>(s->u.bytes));
+  return p->magic == kMagic ? p : nullptr;
+}
+
+bool supported(std::int32_t preset) {
+  return preset == KESTREL_PRESET_BASE_QUADROTOR || preset == KESTREL_PRESET_HEXAROTOR || preset == KESTREL_PRESET_X500;
+}
+
+void set3(float* dst, const Vec3& v) {
+  for (int i = 0; i < 3; ++i) dst[i] = static_cast<float>(v[i]);
+}
+Vec3 vec3(const float* v) { return Vec3(static_cast<real>(v[0]), static_cast<real>(v[1]), static_cast<real>(v[2])); }
+
+}  // namespace
+
+extern "C" {
+
+size_t kestrel_storage_used(void) { return sizeof(CapiStack); }
+
+kestrel_status kestrel_default_params(std::int32_t preset, kestrel_params* p) {
+  if (p == nullptr || !supported(preset)) return KESTREL_INVALID_ARGUMENT;
+  // The Lee gains and the quad's mass and inertia are Aerial Gym's (lee_params_base_quadrotor).
+  // The heavier frames keep the same closed-loop dynamics: the position gains are accelerations
+  // (mass-free), and the attitude gains are torques, so they scale with the inertia.
+  const LeeParams q = lee_params_base_quadrotor();
+  const LeeGains g = lee_nominal_gains(q.gain_ranges);
+  const al::AirframeSpec& spec = al::airframe_spec(static_cast<al::AirframePreset>(preset));
+  real inertia_scale = 1;
+  real mass = q.mass_kg;
+  if (preset != KESTREL_PRESET_BASE_QUADROTOR) {
+    mass = spec.mass_kg;
+    // Inertia ~ m r^2: mass ratio times the squared ratio of arm lengths (quad 0.13 m per axis,
+    // hexarotor arm 0.25 m, X500 0.175 m per axis).
+    const real arm = preset == KESTREL_PRESET_HEXAROTOR ? 0.25_r : 0.175_r * 1.41421356_r;
+    const real arm_q = 0.13_r * 1.41421356_r;
+    inertia_scale = (mass / q.mass_kg) * (arm / arm_q) * (arm / arm_q);
+  }
+  p->preset = preset;
+  p->mass_kg = static_cast<float>(mass);
+  for (int i = 0; i < 3; ++i) p->inertia_diag_kgm2[i] = static_cast<float>(q.inertia_b(i, i) * inertia_scale);
+  set3(p->k_pos, g.k_pos);
+  set3(p->k_vel, g.k_vel);
+  set3(p->k_rot, g.k_rot * inertia_scale);
+  set3(p->k_angvel, g.k_angvel * inertia_scale);
+  p->max_yaw_rate_radps = static_cast<float>(q.max_yaw_rate_radps);
+  p->yaw_headroom = static_cast<float>(al::SequentialDesaturationParams().yaw_headroom);
+  p->use_motor_model = 1;
+  return KESTREL_OK;
+}
+
+kestrel_status kestrel_init(kestrel_storage* storage, std::int32_t preset) {
+  kestrel_params p;
+  if (const kestrel_status st = kestrel_default_params(preset, &p); st != KESTREL_OK) return st;
+  return kestrel_init_params(storage, &p);
+}
+
+kestrel_status kestrel_init_params(kestrel_storage* storage, const kestrel_params* p) {
+  if (storage == nullptr || p == nullptr || !supported(p->preset)) return KESTREL_INVALID_ARGUMENT;
+  CapiStack* s = new (storage->u.bytes) CapiStack();  // value-initialised; magic 0 until the end
+  const auto preset = static_cast<al::AirframePreset>(p->preset);
+
+  LeeParams& lee = s->ctrl.lee;
+  lee = lee_params_base_quadrotor();
+  lee.mass_kg = static_cast<real>(p->mass_kg);
+  lee.inertia_b = Mat3::Zero();
+  for (int i = 0; i < 3; ++i) lee.inertia_b(i, i) = static_cast<real>(p->inertia_diag_kgm2[i]);
+  LeeGains g;
+  g.k_pos = vec3(p->k_pos);
+  g.k_vel = vec3(p->k_vel);
+  g.k_rot = vec3(p->k_rot);
+  g.k_angvel = vec3(p->k_angvel);
+  lee.gain_ranges.min = g;  // min = max fixes the gains
+  lee.gain_ranges.max = g;
+  lee.randomize_gains = false;
+  lee.max_yaw_rate_radps = static_cast<real>(p->max_yaw_rate_radps);
+  if (const Status st = validate_lee_params(lee); st != Status::ok) return to_c(st);
+  controller_reset(ControllerKind::lee_position, s->ctrl, s->ctrl_state);
+
+  if (!is_finite(static_cast<real>(p->yaw_headroom)) || p->yaw_headroom < 0) return KESTREL_INVALID_ARGUMENT;
+  s->desat.yaw_headroom = static_cast<real>(p->yaw_headroom);
+  if (const Status st = al::make_airframe(al::airframe_spec(preset), s->airframe); st != Status::ok) return to_c(st);
+  // Flat multirotors have rank 4 (no lateral force): Status::singular is expected and harmless.
+  const Status am = al::build_allocation_model(s->airframe, s->health, s->model);
+  if (am != Status::ok && am != Status::singular) return to_c(am);
+  al::reset_allocator(s->alloc_state);
+  s->motor_cfg = al::motor_model_preset(preset);
+  RngStream rng(1, 0, kPurposeMotors);
+  const real idle[al::kMaxRotors] = {};
+  if (const Status st = al::motor_model_reset(s->motor_cfg, s->motors, rng, idle); st != Status::ok) return to_c(st);
+  s->use_motor_model = p->use_motor_model != 0;
+  s->magic = kMagic;
+  return KESTREL_OK;
+}
+
+kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, const kestrel_setpoint* sp, float dt_s,
+                            kestrel_output* out) {
+  CapiStack* s = stack_of(storage);
+  if (s == nullptr || st == nullptr || sp == nullptr || out == nullptr) return KESTREL_INVALID_ARGUMENT;
+  const std::int32_t m = sp->mode;
+  if (m != KESTREL_MODE_POSITION && m != KESTREL_MODE_VELOCITY && m != KESTREL_MODE_ATTITUDE && m != KESTREL_MODE_RATES) {
+    return KESTREL_INVALID_ARGUMENT;
+  }
+  if (!(dt_s > 0.0f) || !is_finite(static_cast<real>(dt_s))) return KESTREL_INVALID_ARGUMENT;
+
+  RigidBodyState body;
+  body.position_w = vec3(st->position_w);
+  body.orientation_wb = quat_from_xyzw(static_cast<real>(st->orientation_xyzw[0]), static_cast<real>(st->orientation_xyzw[1]),
+                                       static_cast<real>(st->orientation_xyzw[2]), static_cast<real>(st->orientation_xyzw[3]));
+  body.linvel_w = vec3(st->linvel_w);
+  body.angvel_b = vec3(st->angvel_b);
+  const real action[4] = {static_cast<real>(sp->value[0]), static_cast<real>(sp->value[1]),
+                          static_cast<real>(sp->value[2]), static_cast<real>(sp->value[3])};
+
+  ControllerOutput co;
+  Status worst = update_controller(static_cast<ControllerKind>(m), s->ctrl, s->ctrl_state, body, action, 4, co);
+  // A rejected (non-finite) input still yields the held safe wrench, which is allocated as usual.
+  const Status sa = al::allocate_sequential_desaturation(s->model, s->desat, s->alloc_state, co.wrench_b, s->alloc_out);
+  if (worst == Status::ok) worst = sa;
+  const int n = s->model.num_rotors;
+  if (s->use_motor_model) {
+    const Status sm = al::motor_model_step(s->motor_cfg, s->motors, s->alloc_out.thrust_N, static_cast<real>(dt_s));
+    if (worst == Status::ok) worst = sm;
+  }
+
+  out->num_motors = n;
+  for (int i = 0; i < KESTREL_MAX_MOTORS; ++i) {
+    if (i >= n) {
+      out->motor_command[i] = 0;
+      out->thrust_setpoint_N[i] = 0;
+      out->thrust_N[i] = 0;
+      continue;
+    }
+    // Normalised against the airframe's nominal range: a weak motor's 1.0 stays its full throttle.
+    const real lo = s->airframe.thrust_min_N[i], hi = s->airframe.thrust_max_N[i];
+    const real f = s->alloc_out.thrust_N[i];
+    out->motor_command[i] = static_cast<float>(hi > lo ? clamp((f - lo) / (hi - lo), 0_r, 1_r) : 0_r);
+    out->thrust_setpoint_N[i] = static_cast<float>(f);
+    out->thrust_N[i] = static_cast<float>(s->use_motor_model ? s->motors.thrust_N[i] : f);
+  }
+  const Vec6 w = co.wrench_b.as_vec6();
+  for (int i = 0; i < 6; ++i) out->wrench_b[i] = static_cast<float>(w[i]);
+  out->saturated_mask = s->alloc_out.saturated_mask();
+  out->faults = kestrel_faults(storage);
+  return to_c(worst);
+}
+
+uint32_t kestrel_faults(const kestrel_storage* storage) {
+  const CapiStack* s = stack_of(storage);
+  if (s == nullptr) return 0;
+  // The model's kFaultSingular is the rank deficiency of a flat frame, not a fault.
+  return s->ctrl_state.lee.faults.bits | s->alloc_state.faults.bits | s->motors.faults.bits |
+         (s->model.faults.bits & ~static_cast<std::uint32_t>(kFaultSingular));
+}
+
+void kestrel_clear_faults(kestrel_storage* storage) {
+  CapiStack* s = stack_of(storage);
+  if (s == nullptr) return;
+  s->ctrl_state.lee.faults.clear();
+  s->alloc_state.faults.clear();
+  s->motors.faults.clear();
+}
+
+kestrel_status kestrel_inject_motor_failure(kestrel_storage* storage, std::int32_t motor, float thrust_scale) {
+  CapiStack* s = stack_of(storage);
+  if (s == nullptr || motor < 0 || motor >= s->model.num_rotors || !(thrust_scale >= 0.0f) || !(thrust_scale <= 1.0f)) {
+    return KESTREL_INVALID_ARGUMENT;
+  }
+  const real scale = static_cast<real>(thrust_scale);
+  if (const Status st = al::inject_motor_failure(s->motors, motor, scale); st != Status::ok) return to_c(st);
+  s->health.thrust_scale[motor] = scale;
+  const Status am = al::build_allocation_model(s->airframe, s->health, s->model);
+  return am == Status::singular ? KESTREL_OK : to_c(am);
+}
+
+float kestrel_command_to_pwm_us(float command, float min_us, float max_us) {
+  const float c = command < 0.0f ? 0.0f : (command > 1.0f ? 1.0f : command);  // NaN -> min (motors idle)
+  return c == c ? min_us + c * (max_us - min_us) : min_us;
+}
+
+}  // extern "C"

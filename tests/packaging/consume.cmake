@@ -1,0 +1,31 @@
+# cmake -DBUILD_DIR= -DPREFIX= -DCONSUMER_SRC= -DCONSUMER_BIN= [-DTOOLCHAIN=<file name>] [-DRUN=ON]
+#       [-DGENERATOR=] -P consume.cmake
+# Installs BUILD_DIR into PREFIX, then configures and builds the consumer against it.
+# With TOOLCHAIN, the consumer is cross-compiled with <PREFIX>/share/kestrel/cmake/<TOOLCHAIN>:
+# the installed copy, so the test proves the toolchain files work from outside the source tree.
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    list(JOIN ARGN " " cmd)
+    message(FATAL_ERROR "packaging: failed (${rc}): ${cmd}")
+  endif()
+endfunction()
+file(REMOVE_RECURSE "${PREFIX}" "${CONSUMER_BIN}")
+run("${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${PREFIX}")
+set(args -S "${CONSUMER_SRC}" -B "${CONSUMER_BIN}" "-DCMAKE_PREFIX_PATH=${PREFIX}" -DCMAKE_BUILD_TYPE=Release)
+if(GENERATOR)
+  list(APPEND args -G "${GENERATOR}")
+endif()
+if(TOOLCHAIN)
+  set(tc "${PREFIX}/share/kestrel/cmake/${TOOLCHAIN}")
+  if(NOT EXISTS "${tc}")
+    message(FATAL_ERROR "packaging: the installed package has no ${tc}")
+  endif()
+  list(APPEND args "-DCMAKE_TOOLCHAIN_FILE=${tc}")
+endif()
+run("${CMAKE_COMMAND}" ${args})
+run("${CMAKE_COMMAND}" --build "${CONSUMER_BIN}" -j 2)
+if(RUN)
+  run("${CONSUMER_BIN}/consumer_app")
+endif()
+message(STATUS "packaging: consumer built against ${PREFIX}")
