@@ -21,7 +21,10 @@ mkdir -p "$out"
 cmake --build "$build" -j 2 --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade kestrel_stack_capi
 machine=$(sed -n 's/^KESTREL_BOARD:[A-Z]*=//p' "$build/CMakeCache.txt")
 qemu=${QEMU:-qemu-system-arm}
-elf="$build/bench/control-mcu/kestrel_control_bench.elf"
+# The images' folder: bench/control/mcu in a Cortex-M tree (older trees: bench/control-mcu).
+imgdir="$build/bench/control/mcu"
+[ -d "$imgdir" ] || imgdir="$build/bench/control-mcu"
+elf="$imgdir/kestrel_control_bench.elf"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for run in 1 2; do
@@ -44,7 +47,7 @@ size=${ARM_SIZE:-arm-none-eabi-size}
 # Flash = text + data, static RAM = data + bss without the linker-reserved main stack and its
 # guard (.stack is NOLOAD, counted in bss by size -B; take it from the section table instead).
 mem() {
-  f="$build/bench/control-mcu/kestrel_stack_$1.elf"
+  f="$imgdir/kestrel_stack_$1.elf"
   set -- $("$size" -B "$f" | tail -n 1)
   text=$1 data=$2 bss=$3
   stack=$("$size" -A "$f" | awk '$1 == ".stack" { print $2 }')

@@ -13,7 +13,9 @@
 //  - finite checks of inputs and outputs are branch-free sums (nonfinite_probe()).
 // Measured on the emulated Cortex-M4F (QEMU -icount, -O2, through update_controller()): about
 // 410 instructions for lee_rates, 730-860 for the position-type controllers and the ROV, 900 for
-// lee_attitude. newlib's sinf + cosf of one commanded angle cost ~160 of those.
+// lee_attitude with newlib's sinf + cosf; kestrel::sin_cos (kernel math.hpp: Cephes polynomials,
+// Cody-Waite reduction shared by sine and cosine) took ~25 instructions off each commanded angle
+// and ~3.8 KB of newlib's Payne-Hanek reduction off the firmware's flash.
 #include "kestrel/controllers/lee.hpp"
 
 #include <cmath>
@@ -357,7 +359,9 @@ Wrench update_lee_position(const LeeParams& p, LeeState& s, const RigidBodyState
   // a = K_pos (p_sp - p) + K_vel (0 - v)
   const Vec3 accel_w =
       s.gains.k_pos.cwiseProduct(Vec3(a[0], a[1], a[2]) - b.position_w) - s.gains.k_vel.cwiseProduct(b.linvel_w);
-  return finish_force_heading<false>(p, s, b, fr, accel_w, std::cos(a[3]), std::sin(a[3]), Vec3::Zero(), faults);
+  real c_psi, s_psi;
+  sin_cos(a[3], s_psi, c_psi);
+  return finish_force_heading<false>(p, s, b, fr, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
 }
 
 Wrench update_lee_velocity(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
@@ -379,7 +383,9 @@ Wrench update_lee_velocity_steering_angle(const LeeParams& p, LeeState& s, const
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
   const AttitudeFrame fr = attitude_frame(b.orientation_wb);
   const Vec3 accel_w = s.gains.k_vel.cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
-  return finish_force_heading<false>(p, s, b, fr, accel_w, std::cos(a[3]), std::sin(a[3]), Vec3::Zero(), faults);
+  real c_psi, s_psi;
+  sin_cos(a[3], s_psi, c_psi);
+  return finish_force_heading<false>(p, s, b, fr, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
 }
 
 Wrench update_lee_acceleration(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
@@ -424,7 +430,10 @@ Wrench update_lee_attitude(const LeeParams& p, LeeState& s, const RigidBodyState
   const AttitudeFrame fr = attitude_frame(b.orientation_wb);
   // Not tilt-compensated (quirk 5): the command scales the hover thrust.
   const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.norm();
-  const Mat3 r_d = rotation_zyx(fr.cos_yaw, fr.sin_yaw, std::cos(a[2]), std::sin(a[2]), std::cos(a[1]), std::sin(a[1]));
+  real cp, sp, cr, sr;
+  sin_cos(a[2], sp, cp);
+  sin_cos(a[1], sr, cr);
+  const Mat3 r_d = rotation_zyx(fr.cos_yaw, fr.sin_yaw, cp, sp, cr, sr);
   const Vec3 w_d = clamp_body_yaw_rate(body_rate_of_yaw_rate(fr.r_wb, a[3]), p.max_yaw_rate_radps);
   const Vec3 tau = lee_torque<true>(s.gains, p.inertia_b, fr.r_wb, r_d, b.angvel_b, w_d);
   return commit(s, Vec3(0, 0, fz), tau, Vec3::Zero(), xyzw_nonneg_w(quat_from_rotation_matrix(r_d)), w_d, faults);

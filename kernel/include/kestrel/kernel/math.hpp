@@ -1,4 +1,5 @@
-// Scalar helpers: finite checks, clamps, angle wrapping. Deterministic (no fast-math tricks).
+// Scalar helpers: finite checks, clamps, angle wrapping, sine/cosine. Deterministic (no fast-math
+// tricks).
 #pragma once
 
 #include <cmath>
@@ -43,6 +44,96 @@ inline real wrap_two_pi(real a) {
   real r = std::fmod(a, kTwoPi);
   if (r < 0) r += kTwoPi;
   return r;
+}
+
+namespace detail {
+
+/// Single-precision sine and cosine of one argument, after Cephes sinf.c / cosf.c (S. L. Moshier,
+/// Cephes Math Library 2.2, 1992; also the basis of many embedded libms):
+///  - range reduction: j = trunc(|x| * 4/pi) rounded up to even, so |x| = j pi/4 + r with
+///    |r| <= pi/4; r is computed Cody-Waite style with pi/4 split into three floats DP1 + DP2 + DP3
+///    (DP1, DP2 have few significant bits, so j * DP1 and j * DP2 are exact for the j used here);
+///  - minimax polynomials on [-pi/4, pi/4]: sin r = r + r^3 P(r^2), cos r = 1 - r^2/2 + r^4 Q(r^2)
+///    with Cephes' coefficients (peak relative error ~1.2e-7 on +-4096 per Cephes' documentation;
+///    tests/kernel/test_math.cpp measures it against double on both targets).
+/// Why not std::sin / std::cos: newlib's sinf + cosf pull ~2.9 KB of Payne-Hanek reduction
+/// (__kernel_rem_pio2f and its 2/pi table) into the firmware, cost ~160 instructions per angle on
+/// a Cortex-M4F, and give different bits than glibc on the host. This uses only float +, -, *,
+/// so under -ffp-contract=off it gives the same bits on every IEEE target.
+/// Domain: full accuracy for |x| <= 8192 (Cephes' lossth); from there to 2^24 the reduction is a
+/// single-constant one (absolute error ~ulp(|x|), e.g. ~1e-3 at 8192 rad); beyond 2^24 (where
+/// consecutive floats are more than a radian apart and the angle is meaningless) it returns
+/// sin 0, cos 1 as Cephes does; NaN / inf give NaN. The controllers' angles are clipped to the
+/// action range (default +-10 rad).
+inline void sincos_f32(float x, float& s, float& c) {
+  constexpr float kFourOverPi = 1.27323954473516f;
+  constexpr float kDP1 = 0.78515625f;
+  constexpr float kDP2 = 2.4187564849853515625e-4f;
+  constexpr float kDP3 = 3.77489497744594108e-8f;
+  constexpr float kLossTh = 8192.0f;
+  constexpr float kT24M1 = 16777215.0f;
+  const bool neg = x < 0;
+  float ax = neg ? -x : x;
+  if (!(ax <= kT24M1)) {
+    // NaN or inf: NaN out (x - x); huge finite: Cephes' answer for sin, cos = 1.
+    const float v = (ax - ax);  // 0 for finite, NaN for inf/NaN
+    s = v;
+    c = 1 + v;
+    return;
+  }
+  const float q = kFourOverPi * ax;
+  if (q < 1) {
+    // Octant 0 (|x| < ~pi/4, the common case for commanded attitudes): no reduction. Same bits as
+    // the general path, where j = 0 makes every reduction term exactly zero.
+    const float z = ax * ax;
+    const float ps = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * ax + ax;
+    s = neg ? -ps : ps;
+    c = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+    return;
+  }
+  int j = static_cast<int>(q);
+  float y = static_cast<float>(j);
+  if (j & 1) {  // map zeros to the origin: round the octant up to even
+    j += 1;
+    y += 1;
+  }
+  if (ax <= kLossTh) {
+    ax = ((ax - y * kDP1) - y * kDP2) - y * kDP3;
+  } else {
+    ax = ax - y * 0.7853981633974483096f;
+  }
+  const float z = ax * ax;
+  const float ps = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * ax + ax;
+  const float pc = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z -
+                   0.5f * z + 1.0f;
+  // |x| = k pi/2 + r with k = j/2: (sin, cos)(|x|) = (ps, pc), (pc, -ps), (-ps, -pc), (-pc, ps).
+  const int k = (j >> 1) & 3;
+  float sv, cv;
+  if (k & 1) {
+    sv = pc;
+    cv = ps;
+  } else {
+    sv = ps;
+    cv = pc;
+  }
+  if (k >= 2) sv = -sv;
+  if (k == 1 || k == 2) cv = -cv;
+  s = neg ? -sv : sv;  // sine is odd, cosine even
+  c = cv;
+}
+
+}  // namespace detail
+
+/// Sine and cosine of one angle (named sin_cos: glibc declares ::sincos). Float builds use
+/// detail::sincos_f32 (deterministic, identical bits on the host and the MCU, no libm); double
+/// builds (host only) use the library's double functions.
+inline void sin_cos(real x, real& s, real& c) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  s = std::sin(x);
+  c = std::cos(x);
+#else
+  detail::sincos_f32(x, s, c);
+#endif
 }
 
 }  // namespace kestrel
