@@ -1,0 +1,153 @@
+// kestrel: the desktop harness's command line.
+//   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR
+//   kestrel list
+// With no scenario, `run` uses the embedded default (1024 quadrotors, position setpoints, forest).
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <thread>
+
+#include "kestrel/sim/output.hpp"
+#include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/scenario.hpp"
+#include "kestrel/sim/world.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sim;
+
+namespace {
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--quiet]\n"
+               "       kestrel list\n");
+  return 2;
+}
+
+template <class T>
+void list_one(const char* title, const Registry<T>& r) {
+  std::printf("%s:\n", title);
+  if (r.names().empty()) std::printf("  (none registered)\n");
+  for (const auto& n : r.names()) std::printf("  %-36s %s\n", n.c_str(), r.description(n).c_str());
+}
+
+bool parse_long(const char* s, long long lo, long long& out) {
+  char* end = nullptr;
+  out = std::strtoll(s, &end, 10);
+  return end != s && *end == '\0' && out >= lo;
+}
+
+int run(int argc, char** argv) {
+  std::string scenario, out_dir = "kestrel_out";
+  long long envs = -1, steps = 1000, threads = -1, seed = -1;
+  bool quiet = false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](long long lo, long long& v) {
+      if (i + 1 >= argc || !parse_long(argv[i + 1], lo, v)) {
+        std::fprintf(stderr, "kestrel run: %s expects an integer >= %lld\n", a.c_str(), lo);
+        std::exit(2);
+      }
+      ++i;
+    };
+    if (a == "--envs") value(1, envs);
+    else if (a == "--steps") value(1, steps);
+    else if (a == "--threads") value(1, threads);
+    else if (a == "--seed") value(0, seed);
+    else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
+    else if (a == "--quiet") quiet = true;
+    else if (!a.empty() && a[0] != '-' && scenario.empty()) scenario = a;
+    else return usage();
+  }
+  WorldConfig cfg;
+  std::string err;
+  const bool ok = scenario.empty() ? load_scenario_string(default_scenario_yaml(), "<embedded default>", cfg, err)
+                                   : load_scenario_file(scenario, cfg, err);
+  if (!ok) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
+  if (envs > 0) cfg.env.num_envs = static_cast<int>(envs);
+  if (seed >= 0) cfg.seed = static_cast<std::uint64_t>(seed);
+  cfg.num_threads = threads > 0 ? static_cast<int>(threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::unique_ptr<World> world = World::create(cfg, err);
+  if (!world) {
+    std::fprintf(stderr, "kestrel: %s: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str(), err.c_str());
+    return 1;
+  }
+  world->enable_trace(6, static_cast<int>(steps));
+  std::printf("kestrel run: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str());
+  std::printf("  sim %s (dt %.4g s), env %s, robot %s x%d, controller %s, task %s\n", cfg.sim.name.c_str(),
+              static_cast<double>(cfg.sim.dt_s), cfg.env.name.c_str(), cfg.robot.name.c_str(), cfg.robot.robots_per_env,
+              cfg.controller.name.c_str(), cfg.task.name.c_str());
+  std::printf("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
+              world->obstacle_capacity(), world->num_threads(), cfg.seed, steps);
+  std::printf("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
+              static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
+  // Progress bar on long runs (stderr, so the summary on stdout stays clean to compare).
+  const bool bar = !quiet && static_cast<double>(steps) * world->num_envs() >= 2e6;
+  const long long chunk = std::max(1LL, steps / 50);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long long done = 0; done < steps;) {
+    const long long n = std::min(chunk, steps - done);
+    world->step(static_cast<int>(n));
+    done += n;
+    if (bar) {
+      const int filled = static_cast<int>(40 * done / steps);
+      std::fprintf(stderr, "\r  [%.*s%*s] %3lld%%", filled, "########################################", 40 - filled, "",
+                   100 * done / steps);
+      std::fflush(stderr);
+    }
+  }
+  if (bar) std::fprintf(stderr, "\n");
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const WorldSummary s = world->summary();
+  std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
+  std::printf("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes,
+              s.resets, s.timeouts, s.out_of_bounds);
+  // Success is counted over every finished episode (a crash or an exit ends one unsuccessfully),
+  // not only over the timed-out ones.
+  std::printf("  episodes %" PRIu64 ": success rate %.1f%% (within %.2f m of the target at timeout), crash rate %.1f%%\n",
+              s.episodes_done,
+              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.successes) / static_cast<double>(s.episodes_done) : 0.0,
+              static_cast<double>(cfg.task.success_radius_m),
+              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done) : 0.0);
+  std::printf("  tracking error (|setpoint - position|): mean %.3f m; distance to target at episode end %.3f m; "
+              "final mean distance to target %.3f m\n",
+              s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
+  if (s.placement_fallbacks > 0)
+    std::printf("  placements without a clear start/target/path: %" PRIu64 "\n", s.placement_fallbacks);
+  ::mkdir(out_dir.c_str(), 0755);
+  if (!write_trajectory_csv(*world, out_dir + "/trajectory.csv", err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
+      !write_trajectory_png(*world, out_dir + "/trajectory.png", err)) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
+  std::printf("  wrote %s/trajectory.csv, %s/envs.csv, %s/trajectory.png\n", out_dir.c_str(), out_dir.c_str(), out_dir.c_str());
+  std::printf("state hash: %016" PRIx64 "\n", world->state_hash());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return usage();
+  const std::string cmd = argv[1];
+  if (cmd == "list") {
+    Registries& r = registries();
+    list_one("sims", r.sims);
+    list_one("envs", r.envs);
+    list_one("robots", r.robots);
+    list_one("controllers", r.controllers);
+    list_one("sensors", r.sensors);
+    list_one("tasks", r.tasks);
+    return 0;
+  }
+  if (cmd == "run") return run(argc, argv);
+  return usage();
+}

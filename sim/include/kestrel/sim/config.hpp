@@ -1,0 +1,157 @@
+// Plain configuration structs of the simulation harness, with documented defaults (Box2D's
+// b2DefaultWorldDef habit): one source of truth per preset, validated once, read-only while the
+// world steps. Field names follow Aerial Gym's env/sim/robot configs (ntnu-arl/aerial_gym_simulator,
+// commit f0d0f05: aerial_gym/config/{sim,env,robot}_config) where a field has an Aerial Gym twin.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/controllers/controller.hpp"
+#include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/kernel/types.hpp"
+
+namespace kestrel::sim {
+
+/// Physics parameters (Aerial Gym's sim config: dt, substeps, gravity).
+struct SimParams {
+  std::string name = "base_sim";
+  real dt_s = 0.01_r;           // physics step (Aerial Gym base_sim dt = 0.01 s)
+  int substeps = 1;             // integrator sub-steps per physics step (dynamics only)
+  Vec3 gravity_w = Vec3(0, 0, -kStandardGravity);  // m/s^2
+  Integrator integrator = Integrator::semi_implicit_euler;  // PhysX (Isaac Gym) is semi-implicit
+  // Penalty contact (spring-damper along the normal, clamped Coulomb friction).
+  real contact_stiffness_N_m = 2000;  // a 0.25 kg quad resting sinks mg/k = 1.2 mm
+  real contact_damping_N_s_m = 10;    // damping ratio ~0.2 for the base quadrotor
+  real friction_coefficient = 0.5_r;
+  real friction_damping_N_s_m = 10;   // viscous regularisation of Coulomb friction below the cone
+};
+
+// convex_hull: a loaded mesh's vertices (obstacles only; see mesh.hpp).
+enum class ShapeType : std::uint8_t { sphere = 0, box, capsule, cylinder, convex_hull };
+
+/// Collision shape in the owner's frame (capsule/cylinder axis = local z).
+struct ShapeSpec {
+  ShapeType type = ShapeType::sphere;
+  real radius_m = 0.2_r;                     // sphere / capsule / cylinder
+  real half_length_m = 0;                    // capsule / cylinder: half length of the axis segment
+  Vec3 half_extents_m = Vec3(0.1_r, 0.1_r, 0.1_r);  // box
+};
+
+/// One asset class (Aerial Gym asset config): how many, where (as ratios of the env bounds),
+/// how oriented, which semantic id, whether the curriculum may remove it.
+enum class AssetKind : std::uint8_t { tree = 0, panel, cube, rod, small_wall, wall, thin, sphere, mesh };
+struct AssetClass {
+  std::string name;
+  AssetKind kind = AssetKind::cube;
+  int num_assets = 1;            // maximum count (curriculum level 1)
+  int min_num_assets = 1;        // count at curriculum level 0
+  Vec3 min_position_ratio = Vec3(0.1_r, 0.1_r, 0.1_r);  // of (upper - lower) from lower bound
+  Vec3 max_position_ratio = Vec3(0.9_r, 0.9_r, 0.9_r);
+  Vec3 min_euler_rad = Vec3::Zero();  // orientation drawn uniformly in [min, max] (Euler XYZ)
+  Vec3 max_euler_rad = Vec3::Zero();
+  Vec3 min_size_m = Vec3(0.3_r, 0.3_r, 0.3_r);  // kind-specific (see world.cpp make_asset)
+  Vec3 max_size_m = Vec3(0.6_r, 0.6_r, 0.6_r);
+  bool keep_in_env = false;      // true: the curriculum never removes it
+  int semantic_id = 1;
+  real max_speed_m_s = 0;        // dynamic environment: velocity drawn per reset in +-max
+  std::string mesh_file;         // AssetKind::mesh: .obj/.stl loaded at World::create (size unused)
+};
+
+/// Environment config (Aerial Gym env config fields).
+struct EnvConfig {
+  std::string name = "empty";
+  int num_envs = 1024;
+  real num_physics_steps_per_env_step_mean = 1;
+  real num_physics_steps_per_env_step_std = 0;
+  // Bounds, re-sampled per reset: lower in [lower_min, lower_max], upper in [upper_min, upper_max].
+  Vec3 lower_bound_min_m = Vec3(-5, -5, 0);
+  Vec3 lower_bound_max_m = Vec3(-5, -5, 0);
+  Vec3 upper_bound_min_m = Vec3(5, 5, 5);
+  Vec3 upper_bound_max_m = Vec3(5, 5, 5);
+  bool reset_on_collision = true;
+  real collision_force_threshold_N = 0.05_r;
+  bool create_ground_plane = true;
+  int keep_same_env_for_num_episodes = 1;   // obstacles re-sampled every k-th reset of an env
+  bool sample_timestep_for_latency = false; // per-env action latency in physics steps, per reset
+  int max_latency_physics_steps = 2;
+  bool perturb_observations = false;        // Gaussian noise on what the controller sees
+  real observation_noise_position_m = 0.01_r;
+  real observation_noise_velocity_m_s = 0.01_r;
+  // Random force/torque disturbances (Aerial Gym robot config `disturbance`).
+  bool enable_disturbance = false;
+  real prob_apply_disturbance = 0.05_r;
+  Vec3 max_force_disturbance_N = Vec3(0.75_r, 0.75_r, 0.75_r);
+  Vec3 max_torque_disturbance_Nm = Vec3(0.004_r, 0.004_r, 0.004_r);
+  real curriculum_level = 1;   // 0..1: obstacle count between min_num_assets and num_assets
+  std::vector<AssetClass> assets;   // include_asset_type: the classes present
+};
+
+/// Robot config: dynamics, airframe, motors, controller, collision shape.
+struct RobotConfig {
+  std::string name = "base_quadrotor";
+  int robots_per_env = 1;
+  allocation::AirframePreset airframe = allocation::AirframePreset::base_quadrotor;
+  real mass_kg = 0.25_r;
+  Vec3 inertia_diag_kg_m2 = Vec3(8.45e-4_r, 8.45e-4_r, 1.69e-3_r);
+  Vec3 linear_drag_b = Vec3::Zero();
+  Vec3 quadratic_drag_b = Vec3::Zero();
+  Vec3 angular_drag_b = Vec3::Zero();
+  Vec3 quadratic_angular_drag_b = Vec3::Zero();
+  ShapeSpec shape;  // default: sphere of 0.2 m radius around the base quadrotor
+  // Start state as ratios of the env bounds (Aerial Gym robot config min/max_init_state ratios).
+  Vec3 min_init_position_ratio = Vec3(0.1_r, 0.1_r, 0.1_r);
+  Vec3 max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0.9_r);
+  real max_init_yaw_rad = kPi;
+  bool use_desaturation = true;  // sequential desaturation; false: Aerial Gym's clamped pinv
+};
+
+/// Controller config: registry name -> kind; gains come from the robot (mass, inertia).
+struct ControllerConfig {
+  std::string name = "lee_position_control";
+  ControllerKind kind = ControllerKind::lee_position;
+  bool randomize_gains = false;
+};
+
+/// Task: what actions the robots get and how success is measured.
+enum class TaskKind : std::uint8_t { hover = 0, position_setpoint };
+struct TaskConfig {
+  std::string name = "position_setpoint";
+  TaskKind kind = TaskKind::position_setpoint;
+  int episode_len_env_steps = 500;
+  Vec3 min_target_ratio = Vec3(0.7_r, 0.1_r, 0.2_r);  // targets as ratios of the bounds
+  Vec3 max_target_ratio = Vec3(0.9_r, 0.9_r, 0.8_r);
+  real success_radius_m = 0.3_r;
+  // Placement of the start and the target (Aerial Gym draws both uniformly in their ratio boxes;
+  // with a straight-line position controller that puts targets inside or behind trees, so nearly
+  // every episode of the forest ended in a crash). Each reset draws placement_attempts candidate
+  // (start, target) pairs and keeps the first whose start and target clear every obstacle by
+  // clearance_m (beyond the robot's bounding sphere) and, with line_of_sight, whose straight
+  // segment between them does too. See World::reset_env.
+  real clearance_m = 0.3_r;
+  bool line_of_sight = true;
+  int placement_attempts = 16;   // 1..kMaxPlacementAttempts
+  // 0: the action is the target itself from the first step (Aerial Gym's position setpoint). > 0:
+  // the setpoint given to lee_position_control moves from the start towards the target along the
+  // straight (line-of-sight) path at this speed, so the robot follows the checked path instead of
+  // the saturated, curved response to a step of several metres (up to ~2 m off the line for a
+  // 10 m step with the default Lee gains).
+  real setpoint_speed_m_s = 0;
+};
+constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env
+
+/// Everything a world is built from.
+struct WorldConfig {
+  SimParams sim;
+  EnvConfig env;
+  RobotConfig robot;
+  ControllerConfig controller;
+  TaskConfig task;
+  std::vector<std::string> sensors;  // sensor registry names (none built in yet)
+  std::uint64_t seed = 0;
+  int num_threads = 1;
+};
+
+}  // namespace kestrel::sim

@@ -1,0 +1,31 @@
+// Scenario files (YAML, parsed with yaml-cpp): name the sim, env, robot, controller, sensors and
+// task by registry name, with field overrides. Example (sim/scenarios/default.yaml):
+//
+//   seed: 0
+//   sim: base_sim                      # a name ...
+//   env: {name: forest, num_envs: 1024} # ... or a map with name + overrides
+//   robot: {name: base_quadrotor, robots_per_env: 1}
+//   controller: lee_position_control
+//   task: {name: position_setpoint, episode_len_env_steps: 500}
+//   sensors: []
+//
+// A bad file gives one message naming the file, the field and the allowed values, e.g.
+//   scenario.yaml: env.num_envs: expected a positive integer, got "-3"
+// and leaves `out` untouched (everything is parsed into a temporary first).
+#pragma once
+
+#include <string>
+
+#include "kestrel/sim/config.hpp"
+
+namespace kestrel::sim {
+
+[[nodiscard]] bool load_scenario_file(const std::string& path, WorldConfig& out, std::string& error);
+/// `source_name` is what messages call the text (a file name, "<embedded default>").
+[[nodiscard]] bool load_scenario_string(const std::string& text, const std::string& source_name, WorldConfig& out,
+                                        std::string& error);
+
+/// The embedded default scenario: 1024 base quadrotors flying position setpoints through the forest.
+const char* default_scenario_yaml();
+
+}  // namespace kestrel::sim

@@ -1,0 +1,194 @@
+// The batched world: N environments, each with one or more robots and its own obstacles, stepped
+// in parallel by a fixed thread pool over a static partition of environment indices.
+//
+// Storage is structure-of-arrays over robots (index env * robots_per_env + r) and over obstacle
+// slots (index env * obstacle_capacity + i), all sized when the world is built (MuJoCo's
+// mjModel/mjData split: WorldConfig is the constant model, the arrays are the data). step()
+// never allocates (tests/sim/world_test.cpp proves it with a heap counter).
+//
+// Determinism: every environment owns its random streams RngStream(seed, env, purpose) and no
+// environment reads another's state, so a worker can advance its whole slice of environments by
+// several env-steps without synchronising, and the result is bit-identical for any thread count
+// (golden-hash test in tests/sim/world_test.cpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kestrel/allocation/airframe.hpp"
+#include "kestrel/allocation/allocation_model.hpp"
+#include "kestrel/allocation/motor_model.hpp"
+#include "kestrel/allocation/sequential_desaturation.hpp"
+#include "kestrel/controllers/controller.hpp"
+#include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/kernel/rng.hpp"
+#include "kestrel/sim/collision.hpp"
+#include "kestrel/sim/config.hpp"
+#include "kestrel/sim/thread_pool.hpp"
+
+namespace kestrel::sim {
+
+/// One obstacle slot. Obstacles of an environment are kept sorted by aabb_min_w.x (the sweep
+/// order of the broad phase); a moving obstacle may change its index after a step.
+struct Obstacle {
+  Shape shape;
+  Vec3 linvel_w = Vec3::Zero();   // dynamic environment: set per reset or by set_obstacle_velocity
+  Vec3 aabb_min_w = Vec3::Zero();
+  Vec3 aabb_max_w = Vec3::Zero();
+  std::int16_t semantic_id = 0;
+  AssetKind kind = AssetKind::cube;
+  std::uint8_t class_index = 0;
+};
+
+/// Per-environment counters (summed over its episodes).
+struct EnvStats {
+  std::uint64_t env_steps = 0;
+  std::uint32_t crashes = 0;       // env-steps ending with a robot above the force threshold
+  std::uint32_t resets = 0;        // resets after set-up (crash, timeout, out of bounds)
+  std::uint32_t timeouts = 0;
+  std::uint32_t out_of_bounds = 0;
+  std::uint32_t episodes_done = 0;
+  std::uint32_t successes = 0;     // episodes that ended (timeout) within the success radius
+  double tracking_error_sum_m = 0; // sum over env-steps and robots of |setpoint - position|
+  double final_distance_sum_m = 0; // sum over finished episodes of the mean robot distance to target
+  std::uint32_t placement_fallbacks = 0;  // robot placements with no clear (start, target) pair
+};
+
+struct WorldSummary {
+  std::uint64_t env_steps = 0;
+  std::uint64_t crashes = 0, resets = 0, timeouts = 0, out_of_bounds = 0, episodes_done = 0, successes = 0;
+  std::uint64_t placement_fallbacks = 0;
+  double mean_tracking_error_m = 0;
+  double final_mean_distance_m = 0;  // mean distance to target over robots at the end of the run
+  double episode_end_distance_m = 0; // mean distance to target when an episode ends (any reason)
+};
+
+class World {
+ public:
+  /// Builds a world from a validated config. Returns nullptr and a message on bad parameters;
+  /// nothing is half-built. Every environment is reset once (episode 0).
+  static std::unique_ptr<World> create(const WorldConfig& config, std::string& error);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  /// Advances every environment by num_env_steps env-steps (each: several physics steps).
+  void step(int num_env_steps = 1);
+
+  const WorldConfig& config() const { return cfg_; }
+  int num_envs() const { return num_envs_; }
+  int robots_per_env() const { return robots_per_env_; }
+  int num_threads() const { return pool_ ? pool_->size() : 1; }
+
+  RigidBodyState& robot_state(int env, int robot) { return state_[index(env, robot)]; }
+  const RigidBodyState& robot_state(int env, int robot) const { return state_[index(env, robot)]; }
+  /// The action array the controller reads (kMaxActionDim values; the task writes it at reset).
+  real* action(int env, int robot) { return &actions_[index(env, robot) * kMaxActionDim]; }
+  const Vec3& target(int env, int robot) const { return target_w_[index(env, robot)]; }
+  bool crashed(int env, int robot) const { return crashed_[index(env, robot)] != 0; }
+  const Vec3& contact_force_w(int env, int robot) const { return contact_force_w_[index(env, robot)]; }
+  int num_obstacles(int env) const { return num_obstacles_[env]; }
+  Obstacle& obstacle(int env, int i) { return obstacles_[static_cast<std::size_t>(env) * obstacle_capacity_ + i]; }
+  const Obstacle& obstacle(int env, int i) const {
+    return obstacles_[static_cast<std::size_t>(env) * obstacle_capacity_ + i];
+  }
+  int obstacle_capacity() const { return obstacle_capacity_; }
+  void lower_upper_bounds(int env, Vec3& lower_w, Vec3& upper_w) const {
+    lower_w = lower_w_[env];
+    upper_w = upper_w_[env];
+  }
+  int physics_steps_per_env_step(int env) const { return phys_steps_[env]; }
+  int latency_physics_steps(int env) const { return latency_[env]; }
+  int episode_step(int env) const { return episode_step_[env]; }
+  std::uint32_t layout_generation(int env) const { return layout_generation_[env]; }
+  const EnvStats& stats(int env) const { return stats_[env]; }
+
+  /// Resets one environment now (what a crash, timeout or out-of-bounds does at step end).
+  void reset_env(int env);
+  /// Obstacle-count curriculum level in [0, 1]; takes effect at each environment's next layout.
+  void set_curriculum_level(real level) { cfg_.env.curriculum_level = level; }
+
+  WorldSummary summary() const;
+  /// FNV-1a (64-bit) over every environment's final state, in environment order.
+  std::uint64_t state_hash() const;
+  /// Bytes of world storage per environment (robots, obstacles, streams, counters).
+  std::size_t bytes_per_env() const;
+
+  /// Records robot 0's position of the first num_envs environments for max_env_steps env-steps
+  /// (allocated here, written by step() without allocation).
+  void enable_trace(int num_envs, int max_env_steps);
+  int trace_envs() const { return trace_envs_; }
+  int trace_length() const { return trace_len_; }
+  const Vec3& trace_point(int env, int k) const { return trace_[static_cast<std::size_t>(env) * trace_cap_ + k]; }
+
+  /// Worker entry (public for the thread pool's trampoline).
+  void run_slice(int worker);
+
+ private:
+  World() = default;
+  std::size_t index(int env, int robot) const { return static_cast<std::size_t>(env) * robots_per_env_ + robot; }
+  void env_step(int env);
+  void physics_step(int env, bool use_new_action);
+  void robot_dynamics(int env, int robot, std::size_t i, bool use_new_action);
+  void move_obstacles(int env);
+  void collide_robots(int env);
+  void generate_layout(int env, RngStream& rng);
+  bool overlaps_obstacle(int env, const Shape& s) const;
+  bool clear_point(int env, const Vec3& p) const;
+  bool clear_segment(int env, const Vec3& a, const Vec3& b) const;
+
+  WorldConfig cfg_;
+  int num_envs_ = 0, robots_per_env_ = 0, obstacle_capacity_ = 0;
+  std::size_t action_dim_ = 0;
+  real robot_bound_radius_m_ = 0;  // bounding sphere of the robot's collision shape
+
+  // Constant per-world models (robots are identical within a world).
+  RigidBodyModel body_model_;
+  ControllerParams ctrl_params_;
+  allocation::Airframe airframe_;
+  allocation::AllocationModel alloc_model_;
+  allocation::SequentialDesaturationParams desat_;
+  allocation::MotorModelConfig motor_cfg_;
+
+  // Per robot (num_envs * robots_per_env).
+  std::vector<RigidBodyState> state_;
+  std::vector<ControllerState> ctrl_state_;
+  std::vector<allocation::AllocatorState> alloc_state_;
+  std::vector<allocation::MotorModelState> motors_;
+  std::vector<real> actions_;          // (robots x kMaxActionDim): latest action
+  std::vector<real> applied_actions_;  // (robots x kMaxActionDim): what the controller uses now
+  std::vector<Vec3> target_w_;
+  std::vector<Vec3> setpoint_w_;       // moving setpoint (TaskConfig::setpoint_speed_m_s > 0)
+  std::vector<Vec3> contact_force_w_;  // from the last collision pass, applied at the next step
+  std::vector<Vec3> contact_torque_b_;
+  std::vector<std::uint8_t> crashed_;
+
+  // Per environment.
+  std::vector<RngStream> rng_reset_, rng_step_;  // placement/reset draws; per-step noise/disturbance
+  std::vector<Vec3> lower_w_, upper_w_;
+  std::vector<int> phys_steps_, latency_, episode_step_, num_obstacles_, episodes_since_layout_;
+  std::vector<std::uint32_t> layout_generation_;
+  std::vector<EnvStats> stats_;
+
+  std::vector<Obstacle> obstacles_;  // (num_envs x obstacle_capacity)
+  std::vector<std::vector<Vec3>> mesh_vertices_;  // per asset class (AssetKind::mesh), set-up only
+
+  // Trace.
+  std::vector<Vec3> trace_;
+  int trace_envs_ = 0, trace_cap_ = 0, trace_len_ = 0;
+  std::uint64_t trace_base_ = 0;
+
+  // Threads: static partition, pending env-steps for run_slice.
+  std::unique_ptr<ThreadPool> pool_;
+  int pending_steps_ = 0;
+};
+
+/// Robots per asset link: a tree is a trunk and this many branches (one obstacle slot each).
+constexpr int kTreeBranches = 3;
+/// Obstacle slots an asset class needs at most.
+int asset_class_slots(const AssetClass& c);
+
+}  // namespace kestrel::sim

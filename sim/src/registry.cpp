@@ -1,0 +1,157 @@
+// Built-in sims, environments, robots, controllers and tasks. Environment layouts follow Aerial
+// Gym's env configs (empty_env, env_with_obstacles, forest_env, dynamic_env) in spirit and scale
+// (env_with_obstacles: ~45 obstacles), not in every number.
+#include "kestrel/sim/registry.hpp"
+
+#include <cmath>
+
+namespace kestrel::sim {
+
+namespace {
+
+AssetClass asset(const char* name, AssetKind kind, int n, int semantic, Vec3 min_size, Vec3 max_size) {
+  AssetClass c;
+  c.name = name;
+  c.kind = kind;
+  c.num_assets = n;
+  c.min_num_assets = n / 4;
+  c.semantic_id = semantic;
+  c.min_size_m = min_size;
+  c.max_size_m = max_size;
+  return c;
+}
+
+EnvConfig obstacle_env(const char* name) {
+  EnvConfig e;
+  e.name = name;
+  e.lower_bound_min_m = Vec3(-6, -6, 0);
+  e.lower_bound_max_m = Vec3(-5, -5, 0);
+  e.upper_bound_min_m = Vec3(5, 5, 4);
+  e.upper_bound_max_m = Vec3(6, 6, 5);
+  AssetClass walls = asset("walls", AssetKind::wall, 5, 8, Vec3::Zero(), Vec3::Zero());
+  walls.keep_in_env = true;
+  walls.min_num_assets = 5;
+  e.assets.push_back(walls);
+  AssetClass panels = asset("panels", AssetKind::panel, 20, 1, Vec3(0, 0.8_r, 1.0_r), Vec3(0, 1.6_r, 2.5_r));
+  panels.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.1_r);
+  panels.max_position_ratio = Vec3(0.85_r, 0.95_r, 0.9_r);
+  panels.max_euler_rad = Vec3(0, 0, kPi);
+  e.assets.push_back(panels);
+  AssetClass cubes = asset("objects", AssetKind::cube, 8, 2, Vec3::Constant(0.3_r), Vec3::Constant(0.8_r));
+  cubes.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.05_r);
+  cubes.max_position_ratio = Vec3(0.85_r, 0.95_r, 0.95_r);
+  cubes.max_euler_rad = Vec3(kPi, kPi, kPi);
+  e.assets.push_back(cubes);
+  AssetClass rods = asset("rods", AssetKind::rod, 6, 3, Vec3(0.03_r, 0, 0.8_r), Vec3(0.08_r, 0, 2.0_r));
+  rods.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.1_r);
+  rods.max_position_ratio = Vec3(0.85_r, 0.95_r, 0.9_r);
+  rods.max_euler_rad = Vec3(kPi / 2, kPi / 2, 0);
+  e.assets.push_back(rods);
+  AssetClass small_walls = asset("small_walls", AssetKind::small_wall, 6, 4, Vec3(0, 0.5_r, 0.5_r), Vec3(0, 1.2_r, 1.2_r));
+  small_walls.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.1_r);
+  small_walls.max_position_ratio = Vec3(0.85_r, 0.95_r, 0.9_r);
+  small_walls.max_euler_rad = Vec3(0, 0, kPi);
+  e.assets.push_back(small_walls);
+  return e;
+}
+
+}  // namespace
+
+void register_builtins(Registries& r) {
+  r.sims.add("base_sim", "dt 0.01 s, 1 substep, gravity (0, 0, -9.81)", [] { return SimParams(); });
+  r.sims.add("fast_sim", "dt 0.005 s, 1 substep", [] {
+    SimParams s;
+    s.name = "fast_sim";
+    s.dt_s = 0.005_r;
+    return s;
+  });
+  r.sims.add("falling_forwards", "gravity tilted forwards: (4.905, 0, -8.496) m/s^2 (30 deg)", [] {
+    SimParams s;
+    s.name = "falling_forwards";
+    s.gravity_w = Vec3(kStandardGravity * 0.5_r, 0, -kStandardGravity * std::sqrt(0.75_r));
+    return s;
+  });
+
+  r.envs.add("empty", "no obstacles, ground plane, bounds +-5 m x 5 m", [] { return EnvConfig(); });
+  r.envs.add("env_with_obstacles", "5 bounding walls, 20 panels, 8 objects, 6 rods, 6 small walls (~45)",
+             [] { return obstacle_env("env_with_obstacles"); });
+  r.envs.add("forest", "10 procedural trees (capsule trunk + 3 branches each)", [] {
+    EnvConfig e;
+    e.name = "forest";
+    e.lower_bound_min_m = Vec3(-6, -4, 0);
+    e.lower_bound_max_m = Vec3(-6, -4, 0);
+    e.upper_bound_min_m = Vec3(6, 4, 5);
+    e.upper_bound_max_m = Vec3(6, 4, 5);
+    AssetClass trees = asset("trees", AssetKind::tree, 10, 5, Vec3(0.08_r, 1.0_r, 3.0_r), Vec3(0.2_r, 1.8_r, 5.0_r));
+    trees.min_position_ratio = Vec3(0.3_r, 0.05_r, 0);
+    trees.max_position_ratio = Vec3(0.7_r, 0.95_r, 0);
+    e.assets.push_back(trees);
+    return e;
+  });
+  r.envs.add("lidar_navigation", "panels, thin poles and objects for lidar navigation (~35)", [] {
+    EnvConfig e = obstacle_env("lidar_navigation");
+    e.assets.erase(e.assets.begin());  // no bounding walls: open sides
+    AssetClass thin = asset("thin", AssetKind::thin, 10, 6, Vec3(0.02_r, 0, 2.0_r), Vec3(0.05_r, 0, 4.0_r));
+    thin.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.5_r);
+    thin.max_position_ratio = Vec3(0.85_r, 0.95_r, 0.5_r);
+    e.assets.push_back(thin);
+    return e;
+  });
+  r.envs.add("dynamic", "env_with_obstacles whose objects move at up to 1 m/s and bounce off the bounds", [] {
+    EnvConfig e = obstacle_env("dynamic");
+    for (AssetClass& c : e.assets)
+      if (c.kind != AssetKind::wall) c.max_speed_m_s = 1;
+    return e;
+  });
+
+  r.robots.add("base_quadrotor", "Aerial Gym base quadrotor: 0.25 kg, 4 x [0, 2] N, sphere r 0.2 m", [] { return RobotConfig(); });
+  r.robots.add("x500", "Holybro X500 class quad: 2.0 kg, 4 x [0, 10] N, sphere r 0.35 m", [] {
+    RobotConfig c;
+    c.name = "x500";
+    c.airframe = allocation::AirframePreset::x500;
+    c.mass_kg = 2.0_r;
+    c.inertia_diag_kg_m2 = Vec3(0.0217_r, 0.0217_r, 0.04_r);
+    c.shape.radius_m = 0.35_r;
+    return c;
+  });
+  r.robots.add("hexarotor", "hex-X, 2.4 kg, 6 x [0, 8] N, sphere r 0.4 m", [] {
+    RobotConfig c;
+    c.name = "hexarotor";
+    c.airframe = allocation::AirframePreset::hexarotor;
+    c.mass_kg = 2.4_r;
+    c.inertia_diag_kg_m2 = Vec3(0.03_r, 0.03_r, 0.055_r);
+    c.shape.radius_m = 0.4_r;
+    return c;
+  });
+
+  for (std::size_t k = 0; k < kNumControllerKinds; ++k) {
+    const ControllerKind kind = static_cast<ControllerKind>(k);
+    if (kind == ControllerKind::rov_fully_actuated) continue;  // needs a fully actuated robot
+    const std::string name = controller_name(kind);
+    r.controllers.add(name, "core controller " + name, [kind, name] {
+      ControllerConfig c;
+      c.name = name;
+      c.kind = kind;
+      return c;
+    });
+  }
+
+  r.tasks.add("position_setpoint", "fly to a target drawn per episode; success = within 0.3 m at timeout", [] { return TaskConfig(); });
+  r.tasks.add("hover", "hold the start position", [] {
+    TaskConfig t;
+    t.name = "hover";
+    t.kind = TaskKind::hover;
+    return t;
+  });
+}
+
+Registries& registries() {
+  static Registries r = [] {
+    Registries x;
+    register_builtins(x);
+    return x;
+  }();
+  return r;
+}
+
+}  // namespace kestrel::sim

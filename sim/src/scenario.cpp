@@ -1,0 +1,283 @@
+#include "kestrel/sim/scenario.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "kestrel/sim/registry.hpp"
+
+namespace kestrel::sim {
+
+namespace {
+
+struct ScenarioError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+[[noreturn]] void bad(const std::string& field, const std::string& msg) { throw ScenarioError(field + ": " + msg); }
+
+std::string scalar_text(const YAML::Node& n) {
+  if (n.IsScalar()) return n.Scalar();
+  return n.IsSequence() ? "a list" : n.IsMap() ? "a map" : "nothing";
+}
+
+int get_int(const YAML::Node& n, const std::string& f, int min_value) {
+  int v = 0;
+  if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || v < min_value)
+    bad(f, (min_value == 1 ? std::string("expected a positive integer") : "expected an integer >= " + std::to_string(min_value)) +
+               ", got \"" + scalar_text(n) + "\"");
+  return v;
+}
+real get_real(const YAML::Node& n, const std::string& f, double lo, double hi) {
+  double v = 0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !(v >= lo && v <= hi)) {
+    std::ostringstream s;
+    s << "expected a number in [" << lo << ", " << hi << "], got \"" << scalar_text(n) << "\"";
+    bad(f, s.str());
+  }
+  return static_cast<real>(v);
+}
+bool get_bool(const YAML::Node& n, const std::string& f) {
+  bool v = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) bad(f, "expected true or false, got \"" + scalar_text(n) + "\"");
+  return v;
+}
+Vec3 get_vec3(const YAML::Node& n, const std::string& f) {
+  if (!n.IsSequence() || n.size() != 3) bad(f, "expected a list of 3 numbers, got " + scalar_text(n));
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) v[i] = get_real(n[i], f + "[" + std::to_string(i) + "]", -1e9, 1e9);
+  return v;
+}
+
+/// name + override map of a section; checks keys against the allowed set.
+std::string section_name(const YAML::Node& n, const std::string& section) {
+  if (n.IsScalar()) return n.Scalar();
+  if (!n.IsMap()) bad(section, "expected a registry name or a map with `name`");
+  if (!n["name"]) bad(section + ".name", "missing");
+  return n["name"].Scalar();
+}
+void check_keys(const YAML::Node& n, const std::string& section, const std::set<std::string>& allowed) {
+  if (!n.IsMap()) return;
+  for (const auto& kv : n) {
+    const std::string k = kv.first.Scalar();
+    if (k == "name" || allowed.count(k) != 0) continue;
+    std::string list = "name";
+    for (const auto& a : allowed) list += ", " + a;
+    bad(section + "." + k, "unknown field; allowed: " + list);
+  }
+}
+template <class T>
+T lookup(const Registry<T>& reg, const std::string& name, const std::string& section) {
+  T out;
+  if (!reg.make(name, out)) bad(section, "unknown " + section + " \"" + name + "\"; known: " + reg.joined());
+  return out;
+}
+
+void parse_sim(const YAML::Node& n, SimParams& s) {
+  s = lookup(registries().sims, section_name(n, "sim"), "sim");
+  check_keys(n, "sim", {"dt_s", "substeps", "gravity_w", "integrator", "contact_stiffness_N_m", "contact_damping_N_s_m",
+                        "friction_coefficient"});
+  if (!n.IsMap()) return;
+  if (n["dt_s"]) s.dt_s = get_real(n["dt_s"], "sim.dt_s", 1e-6, 1);
+  if (n["substeps"]) s.substeps = get_int(n["substeps"], "sim.substeps", 1);
+  if (n["gravity_w"]) s.gravity_w = get_vec3(n["gravity_w"], "sim.gravity_w");
+  if (n["integrator"]) {
+    const std::string v = n["integrator"].Scalar();
+    if (v == "rk4") s.integrator = Integrator::rk4;
+    else if (v == "semi_implicit_euler") s.integrator = Integrator::semi_implicit_euler;
+    else bad("sim.integrator", "expected one of rk4, semi_implicit_euler, got \"" + v + "\"");
+  }
+  if (n["contact_stiffness_N_m"]) s.contact_stiffness_N_m = get_real(n["contact_stiffness_N_m"], "sim.contact_stiffness_N_m", 0, 1e9);
+  if (n["contact_damping_N_s_m"]) s.contact_damping_N_s_m = get_real(n["contact_damping_N_s_m"], "sim.contact_damping_N_s_m", 0, 1e9);
+  if (n["friction_coefficient"]) s.friction_coefficient = get_real(n["friction_coefficient"], "sim.friction_coefficient", 0, 100);
+}
+
+void parse_env(const YAML::Node& n, EnvConfig& e) {
+  e = lookup(registries().envs, section_name(n, "env"), "env");
+  check_keys(n, "env", {"num_envs", "num_physics_steps_per_env_step_mean", "num_physics_steps_per_env_step_std",
+                        "lower_bound_min", "lower_bound_max", "upper_bound_min", "upper_bound_max", "reset_on_collision",
+                        "collision_force_threshold", "create_ground_plane", "keep_same_env_for_num_episodes",
+                        "sample_timestep_for_latency", "max_latency_physics_steps", "perturb_observations",
+                        "enable_disturbance", "prob_apply_disturbance", "curriculum_level", "include_asset_type"});
+  if (!n.IsMap()) return;
+  if (n["num_envs"]) e.num_envs = get_int(n["num_envs"], "env.num_envs", 1);
+  if (n["num_physics_steps_per_env_step_mean"])
+    e.num_physics_steps_per_env_step_mean = get_real(n["num_physics_steps_per_env_step_mean"], "env.num_physics_steps_per_env_step_mean", 1, 1000);
+  if (n["num_physics_steps_per_env_step_std"])
+    e.num_physics_steps_per_env_step_std = get_real(n["num_physics_steps_per_env_step_std"], "env.num_physics_steps_per_env_step_std", 0, 1000);
+  if (n["lower_bound_min"]) e.lower_bound_min_m = get_vec3(n["lower_bound_min"], "env.lower_bound_min");
+  if (n["lower_bound_max"]) e.lower_bound_max_m = get_vec3(n["lower_bound_max"], "env.lower_bound_max");
+  if (n["upper_bound_min"]) e.upper_bound_min_m = get_vec3(n["upper_bound_min"], "env.upper_bound_min");
+  if (n["upper_bound_max"]) e.upper_bound_max_m = get_vec3(n["upper_bound_max"], "env.upper_bound_max");
+  if (n["reset_on_collision"]) e.reset_on_collision = get_bool(n["reset_on_collision"], "env.reset_on_collision");
+  if (n["collision_force_threshold"]) e.collision_force_threshold_N = get_real(n["collision_force_threshold"], "env.collision_force_threshold", 0, 1e9);
+  if (n["create_ground_plane"]) e.create_ground_plane = get_bool(n["create_ground_plane"], "env.create_ground_plane");
+  if (n["keep_same_env_for_num_episodes"]) e.keep_same_env_for_num_episodes = get_int(n["keep_same_env_for_num_episodes"], "env.keep_same_env_for_num_episodes", 1);
+  if (n["sample_timestep_for_latency"]) e.sample_timestep_for_latency = get_bool(n["sample_timestep_for_latency"], "env.sample_timestep_for_latency");
+  if (n["max_latency_physics_steps"]) e.max_latency_physics_steps = get_int(n["max_latency_physics_steps"], "env.max_latency_physics_steps", 0);
+  if (n["perturb_observations"]) e.perturb_observations = get_bool(n["perturb_observations"], "env.perturb_observations");
+  if (n["enable_disturbance"]) e.enable_disturbance = get_bool(n["enable_disturbance"], "env.enable_disturbance");
+  if (n["prob_apply_disturbance"]) e.prob_apply_disturbance = get_real(n["prob_apply_disturbance"], "env.prob_apply_disturbance", 0, 1);
+  if (n["curriculum_level"]) e.curriculum_level = get_real(n["curriculum_level"], "env.curriculum_level", 0, 1);
+  if (const YAML::Node inc = n["include_asset_type"]) {
+    if (!inc.IsMap()) bad("env.include_asset_type", "expected a map of asset class -> true/false");
+    std::string known;
+    for (const AssetClass& c : e.assets) known += (known.empty() ? "" : ", ") + c.name;
+    for (const auto& kv : inc) {
+      const std::string cls = kv.first.Scalar();
+      bool found = false;
+      for (std::size_t i = 0; i < e.assets.size(); ++i) {
+        if (e.assets[i].name != cls) continue;
+        found = true;
+        if (!get_bool(kv.second, "env.include_asset_type." + cls)) {
+          e.assets.erase(e.assets.begin() + static_cast<long>(i));
+        }
+        break;
+      }
+      if (!found) bad("env.include_asset_type." + cls, "unknown asset class; known: " + (known.empty() ? std::string("(none)") : known));
+    }
+  }
+}
+
+void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& where) {
+  check_keys(n, where, {"robots_per_env", "mass_kg", "inertia_diag_kg_m2", "airframe", "collision_shape", "use_desaturation",
+                        "linear_drag_b", "quadratic_drag_b", "angular_drag_b", "quadratic_angular_drag_b", "file"});
+  if (!n.IsMap()) return;
+  if (n["robots_per_env"]) r.robots_per_env = get_int(n["robots_per_env"], where + ".robots_per_env", 1);
+  if (n["mass_kg"]) r.mass_kg = get_real(n["mass_kg"], where + ".mass_kg", 1e-6, 1e6);
+  if (n["inertia_diag_kg_m2"]) r.inertia_diag_kg_m2 = get_vec3(n["inertia_diag_kg_m2"], where + ".inertia_diag_kg_m2");
+  if (n["use_desaturation"]) r.use_desaturation = get_bool(n["use_desaturation"], where + ".use_desaturation");
+  if (n["linear_drag_b"]) r.linear_drag_b = get_vec3(n["linear_drag_b"], where + ".linear_drag_b");
+  if (n["quadratic_drag_b"]) r.quadratic_drag_b = get_vec3(n["quadratic_drag_b"], where + ".quadratic_drag_b");
+  if (n["angular_drag_b"]) r.angular_drag_b = get_vec3(n["angular_drag_b"], where + ".angular_drag_b");
+  if (n["quadratic_angular_drag_b"]) r.quadratic_angular_drag_b = get_vec3(n["quadratic_angular_drag_b"], where + ".quadratic_angular_drag_b");
+  if (n["airframe"]) {
+    const std::string v = n["airframe"].Scalar();
+    using P = allocation::AirframePreset;
+    const std::pair<const char*, P> names[] = {{"base_quadrotor", P::base_quadrotor}, {"x500", P::x500}, {"hexarotor", P::hexarotor}};
+    bool ok = false;
+    for (const auto& p : names)
+      if (v == p.first) {
+        r.airframe = p.second;
+        ok = true;
+      }
+    if (!ok) bad(where + ".airframe", "expected one of base_quadrotor, x500, hexarotor, got \"" + v + "\"");
+  }
+  if (const YAML::Node s = n["collision_shape"]) {
+    const std::string f = where + ".collision_shape";
+    check_keys(s, f, {"type", "radius_m", "half_length_m", "half_extents_m"});
+    if (!s.IsMap() || !s["type"]) bad(f, "expected a map with `type`");
+    const std::string t = s["type"].Scalar();
+    if (t == "sphere") r.shape.type = ShapeType::sphere;
+    else if (t == "box") r.shape.type = ShapeType::box;
+    else if (t == "capsule") r.shape.type = ShapeType::capsule;
+    else if (t == "cylinder") r.shape.type = ShapeType::cylinder;
+    else bad(f + ".type", "expected one of sphere, box, capsule, cylinder, got \"" + t + "\"");
+    if (s["radius_m"]) r.shape.radius_m = get_real(s["radius_m"], f + ".radius_m", 1e-4, 100);
+    if (s["half_length_m"]) r.shape.half_length_m = get_real(s["half_length_m"], f + ".half_length_m", 0, 100);
+    if (s["half_extents_m"]) r.shape.half_extents_m = get_vec3(s["half_extents_m"], f + ".half_extents_m");
+  }
+}
+
+void parse_robot(const YAML::Node& n, RobotConfig& r, const std::string& dir) {
+  r = lookup(registries().robots, section_name(n, "robot"), "robot");
+  if (n.IsMap() && n["file"]) {
+    // A robot file: the same fields as the robot section, in a file of its own.
+    const std::string path = n["file"].Scalar();
+    const std::string full = (!path.empty() && path[0] == '/') ? path : dir + path;
+    YAML::Node rf;
+    try {
+      rf = YAML::LoadFile(full);
+    } catch (const YAML::Exception& ex) {
+      bad("robot.file", "cannot read robot file \"" + full + "\": " + ex.what());
+    }
+    parse_robot_map(rf, r, "robot.file(" + path + ")");
+  }
+  parse_robot_map(n, r, "robot");
+}
+
+WorldConfig parse(const YAML::Node& root, const std::string& dir) {
+  if (!root.IsMap()) bad("(top level)", "expected a map with sim, env, robot, controller, task, sensors, seed");
+  check_keys(root, "(top level)", {"sim", "env", "robot", "controller", "task", "sensors", "seed", "threads"});
+  WorldConfig c;
+  parse_sim(root["sim"] ? root["sim"] : YAML::Node("base_sim"), c.sim);
+  parse_env(root["env"] ? root["env"] : YAML::Node("empty"), c.env);
+  parse_robot(root["robot"] ? root["robot"] : YAML::Node("base_quadrotor"), c.robot, dir);
+  const YAML::Node ctrl = root["controller"] ? root["controller"] : YAML::Node("lee_position_control");
+  c.controller = lookup(registries().controllers, section_name(ctrl, "controller"), "controller");
+  check_keys(ctrl, "controller", {"randomize_gains"});
+  if (ctrl.IsMap() && ctrl["randomize_gains"]) c.controller.randomize_gains = get_bool(ctrl["randomize_gains"], "controller.randomize_gains");
+  const YAML::Node task = root["task"] ? root["task"] : YAML::Node("position_setpoint");
+  c.task = lookup(registries().tasks, section_name(task, "task"), "task");
+  check_keys(task, "task", {"episode_len_env_steps", "success_radius_m", "clearance_m", "line_of_sight", "placement_attempts",
+                            "setpoint_speed_m_s"});
+  if (task.IsMap() && task["setpoint_speed_m_s"])
+    c.task.setpoint_speed_m_s = get_real(task["setpoint_speed_m_s"], "task.setpoint_speed_m_s", 0, 1000);
+  if (task.IsMap() && task["clearance_m"]) c.task.clearance_m = get_real(task["clearance_m"], "task.clearance_m", 0, 100);
+  if (task.IsMap() && task["line_of_sight"]) c.task.line_of_sight = get_bool(task["line_of_sight"], "task.line_of_sight");
+  if (task.IsMap() && task["placement_attempts"])
+    c.task.placement_attempts = get_int(task["placement_attempts"], "task.placement_attempts", 1);
+  if (task.IsMap() && task["episode_len_env_steps"]) c.task.episode_len_env_steps = get_int(task["episode_len_env_steps"], "task.episode_len_env_steps", 1);
+  if (task.IsMap() && task["success_radius_m"]) c.task.success_radius_m = get_real(task["success_radius_m"], "task.success_radius_m", 0, 1e6);
+  if (const YAML::Node s = root["sensors"]) {
+    if (!s.IsSequence()) bad("sensors", "expected a list of sensor names");
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      SensorConfig sc = lookup(registries().sensors, s[i].Scalar(), "sensors");
+      c.sensors.push_back(sc.name);
+    }
+  }
+  if (root["seed"]) c.seed = static_cast<std::uint64_t>(get_int(root["seed"], "seed", 0));
+  if (root["threads"]) c.num_threads = get_int(root["threads"], "threads", 1);
+  return c;
+}
+
+bool load(const std::function<YAML::Node()>& read, const std::string& name, const std::string& dir, WorldConfig& out,
+          std::string& error) {
+  try {
+    WorldConfig tmp = parse(read(), dir);
+    out = tmp;  // only a fully validated config reaches the caller
+    return true;
+  } catch (const ScenarioError& e) {
+    error = name + ": " + e.what();
+  } catch (const YAML::Exception& e) {
+    error = name + ": " + e.what();
+  }
+  return false;
+}
+
+}  // namespace
+
+bool load_scenario_file(const std::string& path, WorldConfig& out, std::string& error) {
+  std::ifstream f(path);
+  if (!f) {
+    error = path + ": cannot open file";
+    return false;
+  }
+  const std::size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+  return load([&] { return YAML::LoadFile(path); }, path, dir, out, error);
+}
+
+bool load_scenario_string(const std::string& text, const std::string& source_name, WorldConfig& out, std::string& error) {
+  return load([&] { return YAML::Load(text); }, source_name, "", out, error);
+}
+
+const char* default_scenario_yaml() {
+  return "# Embedded default: 1024 quadrotors flying position setpoints through the forest.\n"
+         "seed: 0\n"
+         "sim: base_sim\n"
+         "env: {name: forest, num_envs: 1024}\n"
+         "robot: base_quadrotor\n"
+         "controller: lee_position_control\n"
+         "# Start, target and the straight path between them clear the trees by 0.2 m; the setpoint\n"
+         "# moves along that path at 2 m/s (a 10 m step response of the Lee controller curves up to\n"
+         "# 2 m off the line and into the trees); 8 s episodes.\n"
+         "task: {name: position_setpoint, episode_len_env_steps: 800, setpoint_speed_m_s: 2, clearance_m: 0.2,\n"
+         "       line_of_sight: true, placement_attempts: 64}\n"
+         "sensors: []\n";
+}
+
+}  // namespace kestrel::sim

@@ -1,0 +1,170 @@
+// Mesh loading (OBJ, ASCII and binary STL) on a known mesh, and mesh obstacles colliding as their
+// convex hull: a unit cube loaded from each format must answer like the analytic box.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#include "kestrel/sim/collision.hpp"
+#include "kestrel/sim/mesh.hpp"
+#include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/world.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sim;
+
+namespace {
+// Unit cube [-0.5, 0.5]^3: 8 vertices, 12 triangles (6 quads).
+const float kV[8][3] = {{-.5f, -.5f, -.5f}, {.5f, -.5f, -.5f}, {.5f, .5f, -.5f}, {-.5f, .5f, -.5f},
+                        {-.5f, -.5f, .5f},  {.5f, -.5f, .5f},  {.5f, .5f, .5f},  {-.5f, .5f, .5f}};
+const int kQuads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {2, 3, 7, 6}, {1, 2, 6, 5}, {0, 4, 7, 3}};
+
+std::string tmp(const char* name) { return std::string(::testing::TempDir()) + name; }
+
+std::string write_obj() {
+  const std::string p = tmp("cube.obj");
+  std::ofstream f(p);
+  f << "# cube\no cube\n";
+  for (const auto& v : kV) f << "v " << v[0] << " " << v[1] << " " << v[2] << "\n";
+  f << "vn 0 0 1\n";
+  for (const auto& q : kQuads) f << "f " << q[0] + 1 << "//1 " << q[1] + 1 << "//1 " << q[2] + 1 << " " << q[3] - 8 << "\n";
+  return p;  // the last index of each face is written relative (negative), the others 1-based
+}
+template <class Emit>
+void each_triangle(Emit emit) {
+  for (const auto& q : kQuads) {
+    emit(kV[q[0]], kV[q[1]], kV[q[2]]);
+    emit(kV[q[0]], kV[q[2]], kV[q[3]]);
+  }
+}
+std::string write_ascii_stl() {
+  const std::string p = tmp("cube_ascii.stl");
+  std::ofstream f(p);
+  f << "solid cube\n";
+  each_triangle([&](const float* a, const float* b, const float* c) {
+    f << " facet normal 0 0 0\n  outer loop\n";
+    for (const float* v : {a, b, c}) f << "   vertex " << v[0] << " " << v[1] << " " << v[2] << "\n";
+    f << "  endloop\n endfacet\n";
+  });
+  f << "endsolid cube\n";
+  return p;
+}
+std::string write_binary_stl() {
+  const std::string p = tmp("cube_binary.stl");
+  std::ofstream f(p, std::ios::binary);
+  char header[80] = {};
+  std::strcpy(header, "solid but binary");  // binary files may start with "solid" too
+  f.write(header, 80);
+  const std::uint32_t n = 12;
+  f.write(reinterpret_cast<const char*>(&n), 4);
+  each_triangle([&](const float* a, const float* b, const float* c) {
+    const float normal[3] = {0, 0, 0};
+    f.write(reinterpret_cast<const char*>(normal), 12);
+    for (const float* v : {a, b, c}) f.write(reinterpret_cast<const char*>(v), 12);
+    const std::uint16_t attr = 0;
+    f.write(reinterpret_cast<const char*>(&attr), 2);
+  });
+  return p;
+}
+}  // namespace
+
+TEST(SimMesh, LoadsCubeFromObjAsciiStlBinaryStl) {
+  for (const std::string& p : {write_obj(), write_ascii_stl(), write_binary_stl()}) {
+    TriangleMesh m;
+    std::string err;
+    ASSERT_TRUE(load_mesh(p, m, err)) << err;
+    EXPECT_EQ(m.vertices.size(), 8u) << p;
+    EXPECT_EQ(m.triangles.size(), 12u) << p;
+    Vec3 mn = Vec3::Constant(1e9_r), mx = Vec3::Constant(-1e9_r);
+    for (const Vec3& v : m.vertices) {
+      mn = mn.cwiseMin(v);
+      mx = mx.cwiseMax(v);
+    }
+    EXPECT_EQ(mn, Vec3::Constant(-0.5_r)) << p;
+    EXPECT_EQ(mx, Vec3::Constant(0.5_r)) << p;
+    for (const auto& t : m.triangles)
+      for (int i : t) EXPECT_TRUE(i >= 0 && i < 8);
+  }
+}
+
+TEST(SimMesh, BadFilesGiveMessages) {
+  TriangleMesh m;
+  std::string err;
+  EXPECT_FALSE(load_mesh(tmp("missing.obj"), m, err));
+  EXPECT_NE(err.find("cannot open"), std::string::npos);
+  EXPECT_FALSE(load_mesh(tmp("x.ply"), m, err));
+  EXPECT_NE(err.find("unknown mesh format"), std::string::npos);
+  const std::string p = tmp("bad.obj");
+  std::ofstream(p) << "v 0 0 0\nv 1 0 0\nf 1 2 7\n";
+  EXPECT_FALSE(load_mesh(p, m, err));
+  EXPECT_NE(err.find("line 3"), std::string::npos) << err;
+  EXPECT_TRUE(m.vertices.empty());  // untouched
+}
+
+TEST(SimMesh, ConvexHullCollidesLikeTheBox) {
+  TriangleMesh m;
+  std::string err;
+  ASSERT_TRUE(load_mesh(write_binary_stl(), m, err)) << err;
+  Shape hull;
+  hull.type = ShapeType::convex_hull;
+  hull.vertices = m.vertices.data();
+  hull.num_vertices = static_cast<int>(m.vertices.size());
+  hull.position_w = Vec3(1, 2, 3);
+  hull.orientation_wb = Quat(Eigen::AngleAxis<real>(0.4_r, Vec3(0, 0, 1)));
+  Shape box = hull;
+  box.type = ShapeType::box;
+  box.half_extents_m = Vec3::Constant(0.5_r);
+  box.vertices = nullptr;
+  box.num_vertices = 0;
+  Vec3 hmn, hmx, bmn, bmx;
+  shape_aabb(hull, hmn, hmx);
+  shape_aabb(box, bmn, bmx);
+  EXPECT_LT((hmn - bmn).norm(), 1e-5);
+  EXPECT_LT((hmx - bmx).norm(), 1e-5);
+  // Robot spheres and boxes at and around the obstacle: same hit, depth and normal as the box.
+  for (const Vec3& off : {Vec3(0.6_r, 0, 0), Vec3(0, 0.65_r, 0.1_r), Vec3(0, 0, 0.55_r), Vec3(2, 0, 0), Vec3(0.3_r, 0.3_r, 0.62_r)}) {
+    for (ShapeType t : {ShapeType::sphere, ShapeType::box}) {
+      Shape robot;
+      robot.type = t;
+      robot.radius_m = 0.2_r;
+      robot.half_extents_m = Vec3(0.15_r, 0.15_r, 0.05_r);
+      robot.position_w = hull.position_w + off;
+      const Contact kh = collide(robot, hull), kb = collide(robot, box);
+      ASSERT_EQ(kh.hit, kb.hit) << off.transpose();
+      if (!kh.hit) continue;
+      EXPECT_NEAR(kh.depth_m, kb.depth_m, 2e-3) << off.transpose();
+      EXPECT_GT(kh.normal_w.dot(kb.normal_w), 0.99) << off.transpose();
+    }
+  }
+}
+
+TEST(SimMesh, MeshObstaclesInAWorld) {
+  WorldConfig c;
+  ASSERT_TRUE(registries().envs.make("empty", c.env));
+  c.env.num_envs = 4;
+  AssetClass a;
+  a.name = "cubes";
+  a.kind = AssetKind::mesh;
+  a.mesh_file = write_obj();
+  a.num_assets = 3;
+  a.min_num_assets = 3;
+  c.env.assets.push_back(a);
+  c.task.kind = TaskKind::hover;
+  c.env.reset_on_collision = false;
+  std::string err;
+  auto w = World::create(c, err);
+  ASSERT_TRUE(w) << err;
+  ASSERT_EQ(w->num_obstacles(0), 3);
+  EXPECT_EQ(w->obstacle(0, 0).shape.type, ShapeType::convex_hull);
+  w->robot_state(0, 0).position_w = w->obstacle(0, 1).shape.position_w + Vec3(0.6_r, 0, 0);  // 0.1 m inside
+  w->step(1);
+  EXPECT_TRUE(w->crashed(0, 0));
+  EXPECT_GT(w->contact_force_w(0, 0)[0], 0);  // pushed out along +x
+  // A missing file fails at set-up with the class and file named.
+  c.env.assets[0].mesh_file = tmp("nope.stl");
+  EXPECT_FALSE(World::create(c, err));
+  EXPECT_NE(err.find("env.assets.cubes"), std::string::npos) << err;
+}
