@@ -6,9 +6,12 @@
 // equal end radii = capsules) and the same mesh, all in one flat scene built with threads=1.
 // Rays: a 64 x 512 dome lidar and a 135 x 240 depth camera from inside the field. Kestrel's rays go
 // through sensors::render (the full sensor path, post-processing included); Embree's through
-// rtcIntersect1 one ray at a time. Hit distances are compared (mismatches counted).
+// rtcIntersect1 one ray at a time (and, for context, rtcIntersect4/8 on packets of 4/8 neighbouring
+// rays of a row). Hit distances are compared (mismatches counted). Kestrel's tiled render is also
+// checked bit for bit against its own single-ray Scene::intersect (range, segmentation, normals):
+// any difference fails the run.
 //
-// Usage: kestrel_bench_raycast [--smoke] [csv_path]
+// Usage: kestrel_bench_raycast [--smoke] [--csv PATH]   (e.g. --csv bench/results/host/raycast.csv)
 #include <embree3/rtcore.h>
 
 #include <chrono>
@@ -86,9 +89,49 @@ Field make_field(int boxes, int trunks, int mesh_rings) {
 struct Result {
   const char* sensor;
   std::uint32_t rays;
-  double kestrel_mrays, embree_mrays;
+  double kestrel_mrays, embree_mrays, embree4_mrays, embree8_mrays;
   long mismatches;
+  long identity_diffs;  // render vs single-ray Scene::intersect, bitwise
 };
+
+bool same_bits(real a, real b) { return std::memcmp(&a, &b, sizeof(real)) == 0; }
+
+// Packets of W rays (W = 4 or 8) along the table's row-major order, all lanes valid except at the end.
+template <int W, typename RayHitW, typename Fn>
+double embree_packets(RTCScene es, const std::vector<real>& dirs, std::uint32_t n, const Mat3& R, const Vec3& o,
+                      real tfar, int reps, Fn&& intersect) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  alignas(64) RayHitW rh;
+  alignas(64) int valid[W];
+  double te = 0;
+  for (int r = 0; r < reps; ++r) {
+    const auto t1 = Clock::now();
+    for (std::uint32_t i0 = 0; i0 < n; i0 += W) {
+      for (int l = 0; l < W; ++l) {
+        const std::uint32_t i = i0 + static_cast<std::uint32_t>(l);
+        valid[l] = i < n ? -1 : 0;
+        const std::uint32_t ii = i < n ? i : n - 1;
+        const Vec3 d = R * Vec3(dirs[3 * ii], dirs[3 * ii + 1], dirs[3 * ii + 2]);
+        rh.ray.org_x[l] = static_cast<float>(o[0]);
+        rh.ray.org_y[l] = static_cast<float>(o[1]);
+        rh.ray.org_z[l] = static_cast<float>(o[2]);
+        rh.ray.dir_x[l] = static_cast<float>(d[0]);
+        rh.ray.dir_y[l] = static_cast<float>(d[1]);
+        rh.ray.dir_z[l] = static_cast<float>(d[2]);
+        rh.ray.tnear[l] = 0;
+        rh.ray.tfar[l] = static_cast<float>(tfar);
+        rh.ray.mask[l] = 0xffffffffu;
+        rh.ray.flags[l] = 0;
+        rh.ray.time[l] = 0;
+        rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+      }
+      intersect(valid, es, &ctx, &rh);
+    }
+    te += seconds_since(t1);
+  }
+  return te / reps;
+}
 
 }  // namespace
 
@@ -97,7 +140,8 @@ int main(int argc, char** argv) {
   const char* csv = nullptr;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--smoke") == 0) smoke = true;
-    else csv = argv[i];
+    else if (std::strcmp(argv[i], "--csv") == 0 && i + 1 < argc) csv = argv[++i];
+    else csv = argv[i];  // legacy: bare path
   }
   const Field f = smoke ? make_field(10, 5, 8) : make_field(150, 60, 40);
   const int reps = smoke ? 1 : 20;
@@ -216,7 +260,8 @@ int main(int argc, char** argv) {
     cp.width = 16;
   }
   const std::uint32_t nmax = std::max(lp.height * lp.width, cp.height * cp.width);
-  std::vector<real> dirs(3 * nmax), scale(nmax), range(nmax), raw(nmax);
+  std::vector<real> dirs(3 * nmax), scale(nmax), range(nmax), raw(nmax), normals(3 * nmax);
+  std::vector<std::int32_t> segs(nmax);
   SensorPose pose;
   pose.position_w = Vec3(0.3_r, -0.2_r, 1.2_r);
   pose.orientation_ws = quat_from_euler_xyz(0, 0, 0.4_r);
@@ -273,7 +318,45 @@ int main(int argc, char** argv) {
       if (r < reps) te += seconds_since(t1);
     }
     te /= reps;
-    results[s] = Result{is_cam ? "camera_135x240" : "lidar_64x512", n, n / tk * 1e-6, n / te * 1e-6, mismatches};
+    // Identity: the tiled render (all outputs) against single-ray Scene::intersect, both modes.
+    long diffs = 0;
+    for (int mode = 0; mode < 2; ++mode) {
+      const bool depth = mode == 1;
+      SensorOutput full;
+      full.range = range.data();
+      full.segmentation = segs.data();
+      full.normals_w = normals.data();
+      if (render(scene, pose, table, op, depth, full) != Status::ok) return 4;
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const real* ds = &dirs[3 * i];
+        const Mat3 Rr = rotation_matrix(pose.orientation_ws.normalized());
+        const real d[3] = {Rr(0, 0) * ds[0] + Rr(0, 1) * ds[1] + Rr(0, 2) * ds[2],
+                           Rr(1, 0) * ds[0] + Rr(1, 1) * ds[1] + Rr(1, 2) * ds[2],
+                           Rr(2, 0) * ds[0] + Rr(2, 1) * ds[1] + Rr(2, 2) * ds[2]};
+        const real o[3] = {pose.position_w[0], pose.position_w[1], pose.position_w[2]};
+        const real sc = depth ? scale[i] : 1_r;
+        SceneHit h;
+        const bool found = scene.intersect(make_ray(o, d), 0, op.max_range / sc, h);
+        real v = found ? h.t * sc : kNoHitValue;
+        if (v > op.max_range) v = op.far_out_of_range_value;
+        else if (v < op.min_range) v = op.near_out_of_range_value;
+        if (op.normalize_range) v = v / op.max_range;
+        bool same = same_bits(v, range[i]) && segs[i] == (found ? static_cast<std::int32_t>(h.seg_id) : kNoHitSegment);
+        for (int k = 0; k < 3; ++k) same = same && same_bits(found ? h.normal_w[k] : 0_r, normals[3 * i + k]);
+        if (!same) ++diffs;
+      }
+    }
+    const real tf = op.max_range;
+    const double te4 = embree_packets<4, RTCRayHit4>(es, dirs, n, R, pose.position_w, tf, reps,
+                                                      [](const int* v, RTCScene sc, RTCIntersectContext* c, RTCRayHit4* h) {
+                                                        rtcIntersect4(v, sc, c, h);
+                                                      });
+    const double te8 = embree_packets<8, RTCRayHit8>(es, dirs, n, R, pose.position_w, tf, reps,
+                                                      [](const int* v, RTCScene sc, RTCIntersectContext* c, RTCRayHit8* h) {
+                                                        rtcIntersect8(v, sc, c, h);
+                                                      });
+    results[s] = Result{is_cam ? "camera_135x240" : "lidar_64x512", n, n / tk * 1e-6, n / te * 1e-6, n / te4 * 1e-6,
+                        n / te8 * 1e-6, mismatches, diffs};
   }
 
   std::printf("scene: %zu boxes, %zu capsule trunks, %u mesh triangles (%u objects)\n", f.box_pos.size(), f.trunk_pos.size(),
@@ -281,21 +364,29 @@ int main(int argc, char** argv) {
   std::printf("build: kestrel mesh %.3f ms + instances %.3f ms = %.3f ms; embree (threads=1) %.3f ms; ratio embree/kestrel %.2f\n",
               k_mesh_build * 1e3, k_scene_build * 1e3, (k_mesh_build + k_scene_build) * 1e3, e_build * 1e3,
               e_build / (k_mesh_build + k_scene_build));
-  for (const Result& r : results)
+  for (const Result& r : results) {
     std::printf("%-15s %6u rays: kestrel %.2f Mrays/s, embree rtcIntersect1 %.2f Mrays/s, ratio kestrel/embree %.2f, distance mismatches %ld\n",
                 r.sensor, r.rays, r.kestrel_mrays, r.embree_mrays, r.kestrel_mrays / r.embree_mrays, r.mismatches);
+    std::printf("%-15s        context: embree rtcIntersect4 %.2f, rtcIntersect8 %.2f Mrays/s; kestrel render vs single-ray differences %ld\n",
+                "", r.embree4_mrays, r.embree8_mrays, r.identity_diffs);
+  }
   if (csv) {
     FILE* fp = std::fopen(csv, "w");
-    if (fp) {
-      std::fprintf(fp, "sensor,rays,kestrel_mrays_s,embree_rtcintersect1_mrays_s,ratio,mismatches,kestrel_build_ms,embree_build_ms\n");
-      for (const Result& r : results)
-        std::fprintf(fp, "%s,%u,%.4f,%.4f,%.4f,%ld,%.4f,%.4f\n", r.sensor, r.rays, r.kestrel_mrays, r.embree_mrays,
-                     r.kestrel_mrays / r.embree_mrays, r.mismatches, (k_mesh_build + k_scene_build) * 1e3, e_build * 1e3);
-      std::fclose(fp);
+    if (fp == nullptr) {
+      std::fprintf(stderr, "cannot write %s\n", csv);
+      return 5;
     }
+    std::fprintf(fp, "sensor,rays,kestrel_mrays_s,embree_rtcintersect1_mrays_s,ratio,mismatches,kestrel_build_ms,embree_build_ms,"
+                     "embree_rtcintersect4_mrays_s,embree_rtcintersect8_mrays_s,render_vs_single_ray_diffs\n");
+    for (const Result& r : results)
+      std::fprintf(fp, "%s,%u,%.4f,%.4f,%.4f,%ld,%.4f,%.4f,%.4f,%.4f,%ld\n", r.sensor, r.rays, r.kestrel_mrays, r.embree_mrays,
+                   r.kestrel_mrays / r.embree_mrays, r.mismatches, (k_mesh_build + k_scene_build) * 1e3, e_build * 1e3,
+                   r.embree4_mrays, r.embree8_mrays, r.identity_diffs);
+    std::fclose(fp);
   }
   rtcReleaseScene(es);
   rtcReleaseDevice(dev);
+  if (results[0].identity_diffs + results[1].identity_diffs != 0) return 1;
   long total = results[0].mismatches + results[1].mismatches;
   return total > static_cast<long>(results[0].rays + results[1].rays) / 100 ? 1 : 0;  // >1 % disagreement fails
 }

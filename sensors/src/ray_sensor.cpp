@@ -166,25 +166,72 @@ Status render(const Scene& scene, const SensorPose& pose, const RayTable& table,
     return Status::invalid_argument;
   const Mat3 r = rotation_matrix(pose.orientation_ws.normalized());
   const real o[3] = {pose.position_w[0], pose.position_w[1], pose.position_w[2]};
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const real* ds = &table.dirs_s[3 * i];
-    const real d[3] = {r(0, 0) * ds[0] + r(0, 1) * ds[1] + r(0, 2) * ds[2],
-                       r(1, 0) * ds[0] + r(1, 1) * ds[1] + r(1, 2) * ds[2],
-                       r(2, 0) * ds[0] + r(2, 1) * ds[1] + r(2, 2) * ds[2]};
-    const real scale = depth && table.depth_scale != nullptr ? table.depth_scale[i] : 1_r;
-    // Depth: cast to max_range / scale so the far cut is a plane (golden convention).
-    const real tmax = op.max_range / scale;
-    SceneHit hit;
-    const bool found = scene.intersect(make_ray(o, d), 0, tmax, hit);
-    const real t = found ? hit.t : kNoHitValue;
-    if (out.range != nullptr) out.range[i] = found ? t * scale : kNoHitValue;
-    if (out.segmentation != nullptr) out.segmentation[i] = found ? static_cast<std::int32_t>(hit.seg_id) : kNoHitSegment;
-    if (out.points != nullptr) {
-      for (int k = 0; k < 3; ++k)
-        out.points[3 * i + k] = out.points_in_world_frame ? o[k] + t * d[k] : t * ds[k];
-    }
-    if (out.normals_w != nullptr) {
-      for (int k = 0; k < 3; ++k) out.normals_w[3 * i + k] = found ? hit.normal_w[k] : 0_r;
+  // All rays share the sensor origin: the image is cast in tiles of kTile x kTile neighbouring
+  // rays; each tile gathers the objects its cone of directions can reach once (nearest first, the
+  // origin already in each object's frame) and every ray of the tile walks that short list
+  // instead of the instance BVH. Results are those of Scene::intersect, ray by ray.
+  constexpr std::uint32_t kTile = 8;
+  const std::uint32_t rows = table.height, cols = table.width;
+  real dirs[kTile * kTile][3];
+  ConeCandidates cand;
+  for (std::uint32_t i0 = 0; i0 < rows; i0 += kTile) {
+    const std::uint32_t i1 = i0 + kTile < rows ? i0 + kTile : rows;
+    for (std::uint32_t j0 = 0; j0 < cols; j0 += kTile) {
+      const std::uint32_t j1 = j0 + kTile < cols ? j0 + kTile : cols;
+      // World directions of the tile, their mean axis, cone half angle and longest range.
+      real axis[3] = {0, 0, 0}, tile_tmax = 0;
+      std::uint32_t m = 0;
+      for (std::uint32_t i = i0; i < i1; ++i) {
+        for (std::uint32_t j = j0; j < j1; ++j, ++m) {
+          const std::uint32_t idx = i * cols + j;
+          const real* ds = &table.dirs_s[3 * idx];
+          real* d = dirs[m];
+          d[0] = r(0, 0) * ds[0] + r(0, 1) * ds[1] + r(0, 2) * ds[2];
+          d[1] = r(1, 0) * ds[0] + r(1, 1) * ds[1] + r(1, 2) * ds[2];
+          d[2] = r(2, 0) * ds[0] + r(2, 1) * ds[1] + r(2, 2) * ds[2];
+          for (int k = 0; k < 3; ++k) axis[k] += d[k];
+          const real scale = depth && table.depth_scale != nullptr ? table.depth_scale[idx] : 1_r;
+          const real tm = op.max_range / scale;
+          tile_tmax = tm > tile_tmax ? tm : tile_tmax;
+        }
+      }
+      const real an = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+      real cos_half = -2;  // any direction
+      if (an > 1e-3_r * static_cast<real>(m)) {
+        for (int k = 0; k < 3; ++k) axis[k] /= an;
+        cos_half = 1;
+        for (std::uint32_t q = 0; q < m; ++q) {
+          const real c = (dirs[q][0] * axis[0] + dirs[q][1] * axis[1] + dirs[q][2] * axis[2]) /
+                         std::sqrt(dirs[q][0] * dirs[q][0] + dirs[q][1] * dirs[q][1] + dirs[q][2] * dirs[q][2]);
+          cos_half = c < cos_half ? c : cos_half;
+        }
+        cos_half -= 1e-5_r;  // rounding margin (never narrower than the rays)
+      }
+      scene.gather_cone(o, axis, cos_half, tile_tmax, cand);
+      m = 0;
+      for (std::uint32_t i = i0; i < i1; ++i) {
+        for (std::uint32_t j = j0; j < j1; ++j, ++m) {
+          const std::uint32_t idx = i * cols + j;
+          const real* ds = &table.dirs_s[3 * idx];
+          const real* d = dirs[m];
+          const real scale = depth && table.depth_scale != nullptr ? table.depth_scale[idx] : 1_r;
+          // Depth: cast to max_range / scale so the far cut is a plane (golden convention).
+          const real tmax = op.max_range / scale;
+          SceneHit hit;
+          const bool found = scene.intersect(cand, make_ray(o, d), 0, tmax, hit);
+          const real t = found ? hit.t : kNoHitValue;
+          if (out.range != nullptr) out.range[idx] = found ? t * scale : kNoHitValue;
+          if (out.segmentation != nullptr)
+            out.segmentation[idx] = found ? static_cast<std::int32_t>(hit.seg_id) : kNoHitSegment;
+          if (out.points != nullptr) {
+            for (int k = 0; k < 3; ++k)
+              out.points[3 * idx + k] = out.points_in_world_frame ? o[k] + t * d[k] : t * ds[k];
+          }
+          if (out.normals_w != nullptr) {
+            for (int k = 0; k < 3; ++k) out.normals_w[3 * idx + k] = found ? hit.normal_w[k] : 0_r;
+          }
+        }
+      }
     }
   }
   if (out.range == nullptr) return Status::ok;

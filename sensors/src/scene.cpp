@@ -140,14 +140,22 @@ inline bool better(const Best& b, real t, std::uint32_t object, std::uint32_t pr
   return object < b.object || (object == b.object && prim < b.prim);
 }
 
-// Tests one object with the world ray moved into its local frame.
-inline void test_object(const SceneObject& ob, std::uint32_t id, const Ray& rw, real tmin, Best& best, real tmax) {
+// The world point ow in the object's local frame: R^T (ow - p).
+inline void to_local_origin(const SceneObject& ob, const real ow[3], real o[3]) {
   const real* r = ob.r_wl;
-  const real v[3] = {rw.o[0] - ob.p_w[0], rw.o[1] - ob.p_w[1], rw.o[2] - ob.p_w[2]};
-  // R^T v and R^T d (rigid: ranges are the same in both frames).
-  const real o[3] = {r[0] * v[0] + r[3] * v[1] + r[6] * v[2], r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
-                     r[2] * v[0] + r[5] * v[1] + r[8] * v[2]};
+  const real v[3] = {ow[0] - ob.p_w[0], ow[1] - ob.p_w[1], ow[2] - ob.p_w[2]};
+  o[0] = r[0] * v[0] + r[3] * v[1] + r[6] * v[2];
+  o[1] = r[1] * v[0] + r[4] * v[1] + r[7] * v[2];
+  o[2] = r[2] * v[0] + r[5] * v[1] + r[8] * v[2];
+}
+
+// Tests one object with the world ray moved into its local frame; o is the ray origin already in
+// that frame (R^T (o_w - p); computed per ray, or once per sensor tile for shared-origin rays).
+inline void test_object_local(const SceneObject& ob, std::uint32_t id, const real o[3], const Ray& rw, real tmin,
+                              Best& best, real tmax) {
+  const real* r = ob.r_wl;
   const real* dw = rw.d;
+  // R^T d (rigid: ranges are the same in both frames).
   const real d[3] = {r[0] * dw[0] + r[3] * dw[1] + r[6] * dw[2], r[1] * dw[0] + r[4] * dw[1] + r[7] * dw[2],
                      r[2] * dw[0] + r[5] * dw[1] + r[8] * dw[2]};
   LocalHit h;
@@ -199,6 +207,26 @@ inline void test_object(const SceneObject& ob, std::uint32_t id, const Ray& rw, 
   best.found = true;
 }
 
+inline void test_object(const SceneObject& ob, std::uint32_t id, const Ray& rw, real tmin, Best& best, real tmax) {
+  real o[3];
+  to_local_origin(ob, rw.o, o);
+  test_object_local(ob, id, o, rw, tmin, best, tmax);
+}
+
+// World-frame hit record of the best local hit.
+inline bool finish(const SceneObject* objects, const Best& best, SceneHit& hit) {
+  if (!best.found) return false;
+  const SceneObject& ob = objects[best.object];
+  const real* r = ob.r_wl;
+  hit.t = best.t;
+  for (int i = 0; i < 3; ++i) hit.normal_w[i] = r[3 * i] * best.n_l[0] + r[3 * i + 1] * best.n_l[1] + r[3 * i + 2] * best.n_l[2];
+  hit.object = best.object;
+  hit.prim = best.prim;
+  hit.seg_id = ob.seg_id;
+  if (ob.shape.type == ShapeType::mesh && ob.shape.mesh->part_ids != nullptr) hit.seg_id = ob.shape.mesh->part_ids[best.prim];
+  return true;
+}
+
 }  // namespace
 
 bool Scene::intersect(const Vec3& o_w, const Vec3& d_w, real tmin, real tmax, SceneHit& hit) const {
@@ -218,16 +246,108 @@ bool Scene::intersect(const Ray& ray, real tmin, real tmax, SceneHit& hit) const
     test_object(objects_[id], id, ray, tmin, best, tcur);
     return best.found ? best.t : tcur;
   });
-  if (!best.found) return false;
-  const SceneObject& ob = objects_[best.object];
-  const real* r = ob.r_wl;
-  hit.t = best.t;
-  for (int i = 0; i < 3; ++i) hit.normal_w[i] = r[3 * i] * best.n_l[0] + r[3 * i + 1] * best.n_l[1] + r[3 * i + 2] * best.n_l[2];
-  hit.object = best.object;
-  hit.prim = best.prim;
-  hit.seg_id = ob.seg_id;
-  if (ob.shape.type == ShapeType::mesh && ob.shape.mesh->part_ids != nullptr) hit.seg_id = ob.shape.mesh->part_ids[best.prim];
-  return true;
+  return finish(objects_, best, hit);
+}
+
+
+namespace {
+
+// Can a ray from o with a unit direction inside the cone (axis, cos_t, sin_t) reach box within
+// range tmax? On true, lower is a conservative lower bound of the range of any point of the box.
+// Margins: boxes are float bounds and directions are unit only to rounding, so the lower bound is
+// shrunk by 1e-4 relative + 0.1 mm and the box's bounding sphere grown by ~1e-3 rad + 0.1 mm.
+inline bool cone_reaches(const real lo[3], const real hi[3], const real o[3], const real axis[3], bool any_dir,
+                         real cos_t, real sin_t, real tmax, real& lower) {
+  real dist2 = 0, diag2 = 0, v[3];
+  for (int k = 0; k < 3; ++k) {
+    const real out = o[k] < lo[k] ? lo[k] - o[k] : (o[k] > hi[k] ? o[k] - hi[k] : 0_r);
+    dist2 += out * out;
+    const real e = (hi[k] - lo[k]) * 0.5_r;
+    diag2 += e * e;
+    v[k] = (lo[k] + hi[k]) * 0.5_r - o[k];
+  }
+  lower = std::sqrt(dist2) * (1 - 1e-4_r) - 1e-4_r;
+  if (lower > tmax) return false;
+  if (any_dir) return true;
+  // Bounding sphere of the box against the cone: out when the angle between the axis and the
+  // centre exceeds the cone half angle plus the sphere's angular radius.
+  const real vn = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const real rad = std::sqrt(diag2) + 1e-3_r * vn + 1e-4_r;
+  if (vn <= rad) return true;  // origin inside the sphere
+  const real cos_a = (v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2]) / vn;
+  const real sin_b = rad / vn;
+  const real cos_b = std::sqrt(1 - sin_b * sin_b);
+  if (cos_t < -cos_b) return true;  // half angle + angular radius >= pi
+  return cos_a >= cos_t * cos_b - sin_t * sin_b - 1e-6_r;
+}
+
+}  // namespace
+
+void Scene::gather_cone(const real origin_w[3], const real axis_w[3], real cos_half_angle, real tmax,
+                        ConeCandidates& c) const {
+  c.count = 0;
+  c.overflow = false;
+  for (int k = 0; k < 3; ++k) c.origin_w[k] = origin_w[k];
+  if (bvh_.node_count == 0 || bvh_.prim_count == 0) return;
+  const bool any_dir = cos_half_angle <= -1;
+  const real cos_t = cos_half_angle < -1 ? -1_r : (cos_half_angle > 1 ? 1_r : cos_half_angle);
+  const real sin_t = std::sqrt(1 - cos_t * cos_t);
+  // Cone walk of the instance BVH (a node outside the cone or beyond tmax holds no candidate).
+  std::uint32_t stack[kBvhMaxDepth + 2];  // one pending sibling per level, depth <= kBvhMaxDepth
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const BvhNode& node = bvh_.nodes[stack[--sp]];
+    real lower;
+    if (!cone_reaches(node.lo, node.hi, origin_w, axis_w, any_dir, cos_t, sin_t, tmax, lower)) continue;
+    if (node.count == 0) {
+      stack[sp++] = node.first + 1;
+      stack[sp++] = node.first;
+      continue;
+    }
+    for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
+      const std::uint32_t id = bvh_objects_[bvh_.prim_index[s]];
+      const SceneObject& ob = objects_[id];
+      if (node.count > 1 && !cone_reaches(ob.box_w.lo, ob.box_w.hi, origin_w, axis_w, any_dir, cos_t, sin_t, tmax, lower))
+        continue;
+      if (c.count == ConeCandidates::kMax) {
+        c.overflow = true;
+        return;
+      }
+      // Insertion by lower bound, then id (the order only affects speed, not results).
+      std::uint32_t j = c.count++;
+      while (j > 0 && (c.lower[j - 1] > lower || (c.lower[j - 1] == lower && c.id[j - 1] > id))) {
+        c.id[j] = c.id[j - 1];
+        c.lower[j] = c.lower[j - 1];
+        for (int k = 0; k < 3; ++k) c.o_l[j][k] = c.o_l[j - 1][k];
+        --j;
+      }
+      c.id[j] = id;
+      c.lower[j] = lower;
+      to_local_origin(ob, origin_w, c.o_l[j]);
+    }
+  }
+}
+
+bool Scene::intersect(const ConeCandidates& c, const Ray& ray, real tmin, real tmax, SceneHit& hit) const {
+  if (c.overflow) return intersect(ray, tmin, tmax, hit);
+  if (dirty_) return false;
+  Best best{tmax, 0, 0, {0, 0, 0}, false};
+  for (std::uint32_t k = 0; k < unbounded_count_; ++k)
+    test_object(objects_[unbounded_[k]], unbounded_[k], ray, tmin, best, best.t);
+  // Every hit on candidate k is at range >= lower[k]; visiting in that order, the walk ends once
+  // the bound passes the best hit (equal ranges are still tested for the (t, id) tie break).
+  real t = best.t;
+  for (std::uint32_t k = 0; k < c.count; ++k) {
+    if (c.lower[k] > t) break;
+    const std::uint32_t id = c.id[k];
+    const SceneObject& ob = objects_[id];
+    real tn;
+    if (!ray_box(ray, ob.box_w.lo, ob.box_w.hi, tmin, t, tn)) continue;
+    test_object_local(ob, id, c.o_l[k], ray, tmin, best, t);
+    if (best.found) t = best.t;
+  }
+  return finish(objects_, best, hit);
 }
 
 }  // namespace kestrel::sensors

@@ -56,6 +56,21 @@ struct SceneHit {
   std::uint32_t prim = 0;              // triangle / cell triangle, 0 for analytic shapes
 };
 
+/// Objects that rays sharing one origin and lying within one cone of directions may hit, ordered
+/// by a lower bound of their hit range (Scene::gather_cone). A sensor's rays share the sensor
+/// origin, so a tile of neighbouring rays is such a bundle: the instance BVH is then replaced by a
+/// short list walked nearest-first that stops once the lower bound passes the best hit, and the
+/// origin is moved into each candidate's local frame once per tile instead of once per ray.
+struct ConeCandidates {
+  static constexpr std::uint32_t kMax = 64;
+  std::uint32_t count = 0;
+  bool overflow = false;  // more than kMax candidates: intersect() falls back to the BVH walk
+  real origin_w[3] = {0, 0, 0};
+  std::uint32_t id[kMax];
+  real lower[kMax];    // lower bound of the range of any hit on the object (conservative)
+  real o_l[kMax][3];   // origin_w in the object's local frame, computed as the single-ray path does
+};
+
 /// Caller-provided storage for up to N objects.
 template <std::uint32_t N>
 struct SceneStorage {
@@ -92,6 +107,15 @@ class Scene {
   /// Closest hit of the world ray (o_w, unit d_w) in [tmin, tmax]. False on a dirty scene.
   bool intersect(const Vec3& o_w, const Vec3& d_w, real tmin, real tmax, SceneHit& hit) const;
   bool intersect(const Ray& ray_w, real tmin, real tmax, SceneHit& hit) const;
+
+  /// Collects the bounded objects that a ray from origin_w with a unit direction d,
+  /// dot(d, axis_w) >= cos_half_angle, can hit within range tmax (axis_w unit; cos_half_angle <= -1:
+  /// any direction). Conservative: it never leaves out an object such a ray hits.
+  void gather_cone(const real origin_w[3], const real axis_w[3], real cos_half_angle, real tmax,
+                   ConeCandidates& c) const;
+  /// Closest hit of ray_w (origin exactly c.origin_w, direction within the gathered cone). Same
+  /// result as intersect(ray_w, ...): the same (t, object, prim) minimum over the same tests.
+  bool intersect(const ConeCandidates& c, const Ray& ray_w, real tmin, real tmax, SceneHit& hit) const;
 
  private:
   SceneObject* objects_ = nullptr;
