@@ -1,8 +1,13 @@
 #!/bin/sh
-# Main job: the closed-loop firmware example (Lee position controller -> sequential-desaturation
-# allocation -> motor model -> rigid-body plant) on the host and on an emulated Cortex-M4F
-# (QEMU mps2-an386, -icount shift=0), printing tracking error, cost per control step and the
-# image's flash/RAM use. Installs missing Debian packages first.
+# Main job:
+#  1. the closed-loop firmware example (Lee position controller -> sequential-desaturation
+#     allocation -> motor model -> rigid-body plant) on the host and on an emulated Cortex-M4F
+#     (QEMU mps2-an386, -icount shift=0), printing tracking error, cost per control step and the
+#     image's flash/RAM use;
+#  2. the simulation harness's embedded default scenario (`kestrel run`: 1024 quadrotors flying
+#     position setpoints through the forest), printing its summary and state hash and writing
+#     CSV logs and a trajectory plot to build/kestrel-run/.
+# Installs missing Debian packages first.
 set -eu
 cd "$(dirname "$0")/.."
 ./scripts/deps.sh
@@ -10,7 +15,7 @@ jobs=$(nproc 2>/dev/null || echo 2)
 
 echo "== building (host)"
 cmake --preset host >/dev/null
-cmake --build --preset host --target kestrel_firmware_host -j "$jobs"
+cmake --build --preset host --target kestrel_firmware_host kestrel -j "$jobs"
 echo "== building (Cortex-M4F)"
 cmake --preset cortex-m4f >/dev/null
 cmake --build --preset cortex-m4f --target kestrel_firmware -j "$jobs"
@@ -23,3 +28,7 @@ echo "== emulated Cortex-M4F"
 elf=build/cortex-m4f/platform/firmware/kestrel_firmware.elf
 sh platform/cortex-m/check-image.sh arm-none-eabi-nm arm-none-eabi-size "$elf" platform/cortex-m/heap-symbols.txt
 sh platform/cortex-m/run-qemu.sh --machine mps2-an386 --elf "$elf" --name kestrel_firmware --timeout 300
+
+echo
+echo "== simulation harness: kestrel run (embedded default scenario)"
+./build/host/sim/kestrel run --out build/kestrel-run
