@@ -8,59 +8,54 @@
 namespace kestrel::sensors {
 
 namespace {
+
 constexpr real kDeg = kPi / 180;
-constexpr real kG = kStandardGravity;
+
+// Shared by all three configs: max_bias_init_value, max_measurement_value, +-2 deg misalignment.
+ImuParams common(const Vec3& acc_noise, real gyro_noise, real acc_walk, real gyro_walk) {
+  ImuParams p;
+  p.accel_noise_density = acc_noise;
+  p.gyro_noise_density = Vec3::Constant(gyro_noise);
+  p.accel_bias_random_walk = Vec3::Constant(acc_walk);
+  p.gyro_bias_random_walk = Vec3::Constant(gyro_walk);
+  p.accel_initial_bias_max = Vec3::Constant(1.0e-3_r);
+  p.gyro_initial_bias_max = Vec3::Constant(1.0e-3_r);
+  p.accel_saturation = Vec3::Constant(100);
+  p.gyro_saturation = Vec3::Constant(10);
+  p.misalignment_min_deg = Vec3::Constant(-2);
+  p.misalignment_max_deg = Vec3::Constant(2);
+  p.enable_noise = true;
+  p.enable_bias = true;
+  p.gravity_compensation = false;
+  return p;
+}
+
 }  // namespace
 
 ImuParams imu_preset_base() {
-  // Assumption: generic consumer MEMS figures of the magnitude Aerial Gym's base IMU uses
-  // (white noise ~1e-3 class, small bias walks); no misalignment; +-16 g and +-2000 deg/s.
-  ImuParams p;
-  p.accel_noise_density = 2.0e-3_r;
-  p.gyro_noise_density = 1.7e-4_r;
-  p.accel_bias_random_walk = 3.0e-3_r;
-  p.gyro_bias_random_walk = 1.9e-5_r;
-  p.accel_initial_bias_max = 0.05_r;
-  p.gyro_initial_bias_max = 0.005_r;
-  p.accel_saturation = 16 * kG;
-  p.gyro_saturation = 2000 * kDeg;
-  return p;
+  return common(Vec3::Constant(0.001688956233495657_r), 0.0010679343003532472_r, 9.782812831313576e-07_r,
+                2.6541629581345176e-05_r);
 }
 
 ImuParams imu_preset_vn100() {
-  ImuParams p;
-  p.accel_noise_density = 0.14e-3_r * kG;       // 0.14 mg/sqrt(Hz) = 1.373e-3
-  p.gyro_noise_density = 0.0035_r * kDeg;       // 6.11e-5 rad/s/sqrt(Hz)
-  p.accel_bias_random_walk = 5.0e-5_r;          // VectorNav support figure (Kalibr configs)
-  p.gyro_bias_random_walk = 3.9e-5_r;           // idem (assumption)
-  p.accel_initial_bias_max = 0.04_r * 1e-3_r * kG * 10;  // in-run stability 0.04 mg -> +-0.4 mg turn-on
-  p.gyro_initial_bias_max = 10 * kDeg / 3600;   // 10 deg/h in-run bias stability
-  p.accel_saturation = 16 * kG;
-  p.gyro_saturation = 2000 * kDeg;
-  return p;
+  return common(Vec3::Constant(0.001372931_r), 6.108652381980153e-05_r, 9.782812831313576e-07_r,
+                2.6541629581345176e-05_r);
 }
 
 ImuParams imu_preset_bmi088() {
-  ImuParams p;
-  p.accel_noise_density = 175e-6_r * kG;        // 1.717e-3 m/s^2/sqrt(Hz)
-  p.gyro_noise_density = 0.014_r * kDeg;        // 2.44e-4 rad/s/sqrt(Hz)
-  p.accel_bias_random_walk = 1.0e-3_r;          // assumption (not in the datasheet)
-  p.gyro_bias_random_walk = 2.0e-5_r;           // assumption
-  p.accel_initial_bias_max = 0.02_r * kG;       // datasheet zero-g offset +-20 mg
-  p.gyro_initial_bias_max = 1 * kDeg;           // datasheet zero-rate offset +-1 deg/s
-  p.accel_saturation = 24 * kG;
-  p.gyro_saturation = 2000 * kDeg;
-  return p;
+  return common(Vec3(0.0015690639999999998_r, 0.0015690639999999998_r, 0.0018632634999999997_r),
+                0.0002443460952792061_r, 0.0013564659966250536_r, 1.4352700094407325e-05_r);
 }
 
 void imu_reset(const ImuParams& p, ImuState& s, RngStream& rng) {
   for (int k = 0; k < 3; ++k) {
-    s.accel_bias_s[k] = p.enable_bias ? rng.uniform(-p.accel_initial_bias_max, p.accel_initial_bias_max) : 0_r;
-    s.gyro_bias_s[k] = p.enable_bias ? rng.uniform(-p.gyro_initial_bias_max, p.gyro_initial_bias_max) : 0_r;
+    s.accel_bias_s[k] =
+        p.enable_bias ? rng.uniform(-p.accel_initial_bias_max[k], p.accel_initial_bias_max[k]) : 0_r;
+    s.gyro_bias_s[k] = p.enable_bias ? rng.uniform(-p.gyro_initial_bias_max[k], p.gyro_initial_bias_max[k]) : 0_r;
   }
-  const real m = p.misalignment_max_deg * kDeg;
-  const real r = rng.uniform(-m, m), pi = rng.uniform(-m, m), y = rng.uniform(-m, m);
-  s.misalignment_bs = quat_from_euler_xyz(r, pi, y);  // identity when m = 0
+  real e[3];
+  for (int k = 0; k < 3; ++k) e[k] = rng.uniform(p.misalignment_min_deg[k] * kDeg, p.misalignment_max_deg[k] * kDeg);
+  s.misalignment_bs = quat_from_euler_xyz(e[0], e[1], e[2]);  // identity when both ranges are 0
 }
 
 Status imu_update(const ImuParams& p, ImuState& s, const Quat& q_wb, const Vec3& linacc_w, const Vec3& angvel_b,
@@ -77,24 +72,24 @@ Status imu_update(const ImuParams& p, ImuState& s, const Quat& q_wb, const Vec3&
   for (int k = 0; k < 3; ++k) {
     const real na = rng.normal(), ng = rng.normal(), wa = rng.normal(), wg = rng.normal();
     if (p.enable_bias) {
-      s.accel_bias_s[k] += wa * p.accel_bias_random_walk * sdt;
-      s.gyro_bias_s[k] += wg * p.gyro_bias_random_walk * sdt;
+      s.accel_bias_s[k] += wa * p.accel_bias_random_walk[k] * sdt;
+      s.gyro_bias_s[k] += wg * p.gyro_bias_random_walk[k] * sdt;
       acc[k] += s.accel_bias_s[k];
       gyr[k] += s.gyro_bias_s[k];
     }
     if (p.enable_noise) {
-      acc[k] += na * p.accel_noise_density / sdt;
-      gyr[k] += ng * p.gyro_noise_density / sdt;
+      acc[k] += na * p.accel_noise_density[k] / sdt;
+      gyr[k] += ng * p.gyro_noise_density[k] / sdt;
     }
   }
   out.saturated = false;
   for (int k = 0; k < 3; ++k) {
-    if (std::fabs(acc[k]) > p.accel_saturation) {
-      acc[k] = std::copysign(p.accel_saturation, acc[k]);
+    if (std::fabs(acc[k]) > p.accel_saturation[k]) {
+      acc[k] = std::copysign(p.accel_saturation[k], acc[k]);
       out.saturated = true;
     }
-    if (std::fabs(gyr[k]) > p.gyro_saturation) {
-      gyr[k] = std::copysign(p.gyro_saturation, gyr[k]);
+    if (std::fabs(gyr[k]) > p.gyro_saturation[k]) {
+      gyr[k] = std::copysign(p.gyro_saturation[k], gyr[k]);
       out.saturated = true;
     }
   }

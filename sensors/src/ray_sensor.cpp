@@ -9,7 +9,56 @@ namespace kestrel::sensors {
 
 namespace {
 
-LidarParams lidar(std::uint32_t h, std::uint32_t w, real hmin, real hmax, real vmin, real vmax, real rmin, real rmax) {
+// Values shared by the Aerial Gym configs (base_sensor_config.py / base_*_config.py).
+const Vec3 kBaseMinTranslation(0.07_r, -0.06_r, 0.01_r), kBaseMaxTranslation(0.12_r, 0.03_r, 0.04_r);
+const Vec3 kBaseMinEuler(-5, -5, -5), kBaseMaxEuler(5, 5, 5);
+const Vec3 kBaseNominalPosition(0.10_r, 0, 0.03_r);
+
+MountParams mount(bool randomize, const Vec3& tmin, const Vec3& tmax, const Vec3& emin, const Vec3& emax) {
+  MountParams m;
+  m.nominal_position_b = kBaseNominalPosition;
+  m.nominal_euler_deg = Vec3::Zero();
+  m.randomize_placement = randomize;
+  m.min_translation_b = tmin;
+  m.max_translation_b = tmax;
+  m.min_euler_deg = emin;
+  m.max_euler_deg = emax;
+  m.fixed_pose_at_range_mean = true;  // warp sensor semantics
+  return m;
+}
+
+RangeOutputParams range(real rmin, real rmax, bool normalize, real far, real near) {
+  RangeOutputParams r;
+  r.min_range = rmin;
+  r.max_range = rmax;
+  r.normalize_range = normalize;
+  r.far_out_of_range_value = far;
+  r.near_out_of_range_value = near;
+  return r;
+}
+
+NoiseParams range_noise(bool enable, real a, real b, real c, real mean_offset, real dropout) {
+  NoiseParams n;
+  n.enable_sensor_noise = enable;
+  n.model = NoiseParams::Model::range_dependent;
+  n.a = a;
+  n.b = b;
+  n.c = c;
+  n.mean_offset = mean_offset;
+  n.pixel_dropout_prob = dropout;
+  return n;
+}
+
+NoiseParams multiplier_noise(bool enable, real multiplier, real dropout) {
+  NoiseParams n;
+  n.enable_sensor_noise = enable;
+  n.model = NoiseParams::Model::multiplier;
+  n.std_dev_multiplier = multiplier;
+  n.pixel_dropout_prob = dropout;
+  return n;
+}
+
+LidarParams lidar(std::uint32_t h, std::uint32_t w, real hmin, real hmax, real vmin, real vmax) {
   LidarParams p;
   p.height = h;
   p.width = w;
@@ -17,20 +66,29 @@ LidarParams lidar(std::uint32_t h, std::uint32_t w, real hmin, real hmax, real v
   p.horizontal_fov_deg_max = hmax;
   p.vertical_fov_deg_min = vmin;
   p.vertical_fov_deg_max = vmax;
-  p.range.min_range = rmin;
-  p.range.max_range = rmax;
-  p.range.set_default_out_of_range_values();
   return p;
 }
 
-CameraParams camera(std::uint32_t h, std::uint32_t w, real hfov, real rmin, real rmax) {
+CameraParams camera(std::uint32_t h, std::uint32_t w, real hfov) {
   CameraParams p;
   p.height = h;
   p.width = w;
   p.horizontal_fov_deg = hfov;
-  p.range.min_range = rmin;
-  p.range.max_range = rmax;
-  p.range.set_default_out_of_range_values();
+  p.calculate_depth = true;
+  p.output = OutputFlags{false, false, true};
+  // Every camera config: randomize_placement ranges and nominal pose of the base camera config.
+  p.mount = mount(true, kBaseMinTranslation, kBaseMaxTranslation, kBaseMinEuler, kBaseMaxEuler);
+  p.noise = multiplier_noise(false, 0.01_r, 0.01_r);
+  return p;
+}
+
+// OS0-128 class values (os0_128_config.py), inherited by OS0-64 / OS1-64 / OS2-64.
+LidarParams os0_128_family(std::uint32_t h, real vmin, real vmax, real rmin, real rmax) {
+  LidarParams p = lidar(h, 512, -180, 180, vmin, vmax);
+  p.range = range(rmin, rmax, true, 35, -35);
+  p.output = OutputFlags{false, false, true};
+  // Mount inherited from base_lidar_config.py.
+  p.mount = mount(true, kBaseMinTranslation, kBaseMaxTranslation, kBaseMinEuler, kBaseMaxEuler);
   return p;
 }
 
@@ -38,17 +96,103 @@ constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 }  // namespace
 
-LidarParams lidar_preset_osdome_64() { return lidar(64, 512, -180, 180, 0, 90, 0.5_r, 20); }
-LidarParams lidar_preset_os0_128() { return lidar(128, 512, -180, 180, -45, 45, 0.3_r, 35); }
-LidarParams lidar_preset_os0_64() { return lidar(64, 512, -180, 180, -45, 45, 0.3_r, 35); }
-LidarParams lidar_preset_os1_64() { return lidar(64, 512, -180, 180, -22.5_r, 22.5_r, 0.3_r, 120); }
-LidarParams lidar_preset_os2_64() { return lidar(64, 512, -180, 180, -11.25_r, 11.25_r, 0.8_r, 240); }
-LidarParams lidar_preset_rs_airy() { return lidar(48, 120, -180, 180, 0, 90, 0.1_r, 30); }
-LidarParams lidar_preset_pmd_flexx2() { return lidar(172, 224, -28, 28, -22, 22, 0.1_r, 4); }
-LidarParams lidar_preset_vl53l5cx() { return lidar(8, 8, -22.5_r, 22.5_r, -22.5_r, 22.5_r, 0.02_r, 4); }
-CameraParams camera_preset_base() { return camera(135, 240, 87, 0.2_r, 10); }
-CameraParams camera_preset_d455() { return camera(270, 480, 87, 0.4_r, 10); }
-CameraParams camera_preset_oakd() { return camera(400, 640, 71.9_r, 0.35_r, 20); }
+LidarParams lidar_preset_base() {
+  LidarParams p = lidar(128, 512, -180, 180, -45, 45);
+  p.range = range(0.2_r, 10, true, 10, -10);
+  p.output = OutputFlags{false, false, true};
+  p.mount = mount(true, kBaseMinTranslation, kBaseMaxTranslation, kBaseMinEuler, kBaseMaxEuler);
+  p.noise = range_noise(true, 0.00001_r, 0.00001_r, 0.00001_r, -0.05_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_osdome_64() {
+  LidarParams p = lidar(64, 512, -180, 180, 0, 90);
+  p.range = range(0.5_r, 20, true, 10, -10);  // out-of-range values inherited (base max_range 10)
+  p.output = OutputFlags{false, false, true};
+  p.mount = mount(false, Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero());
+  p.noise = range_noise(false, 0.00038089_r, -0.00343351_r, 0.01553284_r, -0.025_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_os0_128() {
+  LidarParams p = os0_128_family(128, -45, 45, 0.2_r, 35);
+  p.noise = range_noise(false, 3.36239104e-05_r, -3.17199061e-04_r, 9.61903860e-03_r, -0.05_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_os0_64() {
+  LidarParams p = os0_128_family(64, -45, 45, 0.2_r, 35);
+  p.noise = range_noise(false, 3.36239104e-05_r, -3.17199061e-04_r, 9.61903860e-03_r, -0.025_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_os1_64() {
+  LidarParams p = os0_128_family(64, -22.5_r, 22.5_r, 0.7_r, 90);
+  p.noise = range_noise(false, 3.08287454e-06_r, -4.07347360e-06_r, 5.30757302e-03_r, -0.025_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_os2_64() {
+  LidarParams p = os0_128_family(64, -11.25_r, 11.25_r, 0.7_r, 200);
+  p.noise = range_noise(false, 3.08287454e-06_r, -4.07347360e-06_r, 5.30757302e-03_r, -0.025_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_rs_airy() {
+  LidarParams p = lidar(48, 120, -180, 180, 0, 90);
+  p.range = range(0.2_r, 10, false, 10, -10);  // out-of-range values inherited from the base class
+  p.output = OutputFlags{true, true, false};
+  p.mount = mount(true, Vec3(-0.05_r, 0, 0), Vec3(-0.05_r, 0, 0), Vec3(0, -90, 0), Vec3(0, -90, 0));
+  p.noise = range_noise(false, 0.00038089_r, -0.00343351_r, 0.01553284_r, -0.025_r, 0);
+  return p;
+}
+
+LidarParams lidar_preset_pmd_flexx2() {
+  LidarParams p = lidar(172, 224, -28, 28, -22, 22);
+  p.range = range(0.2_r, 5, true, 5, -5);
+  p.output = OutputFlags{false, false, false};
+  p.mount = mount(true, Vec3(0.07_r, -0.06_r, 0.02_r), Vec3(0.12_r, 0.03_r, 0.06_r), kBaseMinEuler, kBaseMaxEuler);
+  p.noise = range_noise(false, 3.08287454e-06_r, -4.07347360e-06_r, 5.30757302e-03_r, -0.025_r, 0.01_r);
+  return p;
+}
+
+LidarParams lidar_preset_vl53l5cx() {
+  LidarParams p = lidar(8, 8, -45, 45, -45, 45);
+  p.range = range(0.2_r, 4, false, -1, -1);
+  p.output = OutputFlags{false, false, false};
+  p.mount = mount(false, kBaseMinTranslation, kBaseMaxTranslation, kBaseMinEuler, kBaseMaxEuler);
+  // The config's sensor_noise has only pixel_std_dev_multiplier / pixel_dropout_prob (Aerial Gym's
+  // WarpSensor reads std_a.. and would fail on it); the multiplier model is applied.
+  p.noise = multiplier_noise(true, 0.02_r, 0.01_r);
+  return p;
+}
+
+CameraParams camera_preset_base() {
+  CameraParams p = camera(135, 240, 87);
+  p.range = range(0.2_r, 10, true, 10, -10);
+  return p;
+}
+
+CameraParams camera_preset_d455() {
+  CameraParams p = camera(270, 480, 87);
+  p.range = range(0.2_r, 15, true, 15, -15);
+  return p;
+}
+
+CameraParams camera_preset_oakd() {
+  CameraParams p = camera(270, 480, 72);
+  p.range = range(0.7_r, 12, true, 12, -12);
+  p.output.segmentation_camera = false;
+  p.mount.randomize_placement = false;
+  return p;
+}
+
+CameraParams camera_preset_oakd_pro_w() {
+  CameraParams p = camera_preset_oakd();  // subclass of the OAK-D config
+  p.horizontal_fov_deg = 127;
+  p.range.min_range = 0.2_r;              // max 12; out-of-range values inherited (12, -12)
+  return p;
+}
 
 void lidar_ray(const LidarParams& p, std::uint32_t i, std::uint32_t j, real out[3]) {
   // Angles and directions in double as the reference computes them (cheap: once per sensor).
@@ -121,6 +265,10 @@ Status camera_rays(const CameraParams& p, RayTable& t) {
 
 Mount sample_mount(const MountParams& p, RngStream& rng) {
   Vec3 pos = p.nominal_position_b, eul = p.nominal_euler_deg;
+  if (p.fixed_pose_at_range_mean) {
+    pos = Vec3::Zero();
+    eul = (p.min_euler_deg + p.max_euler_deg) / 2;
+  }
   if (p.randomize_placement) {
     for (int k = 0; k < 3; ++k) pos[k] = rng.uniform(p.min_translation_b[k], p.max_translation_b[k]);
     for (int k = 0; k < 3; ++k) eul[k] = rng.uniform(p.min_euler_deg[k], p.max_euler_deg[k]);
@@ -139,21 +287,19 @@ SensorPose sensor_pose(const RigidBodyState& body, const Mount& m) {
   return sp;
 }
 
-void apply_noise(const NoiseParams& p, real* values, std::uint32_t n, RngStream& rng) {
-  if (p.model == NoiseParams::Model::none) return;
+void apply_noise(const NoiseParams& p, real* values, std::uint32_t n, RngStream& rng, real dropout_value) {
+  if (!p.enable_sensor_noise || p.model == NoiseParams::Model::none) return;
   for (std::uint32_t i = 0; i < n; ++i) {
     const real u = rng.uniform();
     const real g = rng.normal();
     const real r = values[i];
-    real stddev;
     if (p.model == NoiseParams::Model::range_dependent) {
-      stddev = p.a * r * r + p.b * r + p.c;
-      values[i] = r + g * stddev + p.offset;
+      const real stddev = p.a * r * r + p.b * r + p.c;
+      values[i] = (r - p.mean_offset) + g * stddev;  // Aerial Gym: N(mean = r - mean_offset, std)
     } else {
-      stddev = p.std_dev_multiplier * r;
-      values[i] = r + g * stddev;
+      values[i] = r + g * (p.std_dev_multiplier * r);
     }
-    if (u < p.pixel_dropout_prob) values[i] = p.dropout_value;
+    if (u < p.pixel_dropout_prob) values[i] = dropout_value;
   }
 }
 
@@ -162,7 +308,8 @@ Status render(const Scene& scene, const SensorPose& pose, const RayTable& table,
   const std::uint32_t n = table.height * table.width;
   if (scene.dirty() || n == 0 || table.dirs_s == nullptr || n > table.capacity || !(op.max_range > 0))
     return Status::invalid_argument;
-  if (noise != nullptr && noise->model != NoiseParams::Model::none && (rng == nullptr || out.range == nullptr))
+  if (noise != nullptr && noise->enable_sensor_noise && noise->model != NoiseParams::Model::none &&
+      (rng == nullptr || out.range == nullptr))
     return Status::invalid_argument;
   const Mat3 r = rotation_matrix(pose.orientation_ws.normalized());
   const real o[3] = {pose.position_w[0], pose.position_w[1], pose.position_w[2]};
@@ -234,12 +381,26 @@ Status render(const Scene& scene, const SensorPose& pose, const RayTable& table,
       }
     }
   }
+  if (out.points != nullptr && !out.points_in_world_frame) {
+    // Sensor-frame point cloud: range rules on the norm, then normalisation (Aerial Gym).
+    for (std::uint32_t i = 0; i < n; ++i) {
+      real* pt = &out.points[3 * i];
+      const real nrm = std::sqrt(pt[0] * pt[0] + pt[1] * pt[1] + pt[2] * pt[2]);
+      if (nrm > op.max_range)
+        for (int k = 0; k < 3; ++k) pt[k] = op.far_out_of_range_value;
+      const real nrm2 = std::sqrt(pt[0] * pt[0] + pt[1] * pt[1] + pt[2] * pt[2]);
+      if (nrm2 < op.min_range)
+        for (int k = 0; k < 3; ++k) pt[k] = op.near_out_of_range_value;
+      if (op.normalize_range)
+        for (int k = 0; k < 3; ++k) pt[k] = pt[k] / op.max_range;
+    }
+  }
   if (out.range == nullptr) return Status::ok;
-  if (noise != nullptr) apply_noise(*noise, out.range, n, *rng);
+  if (noise != nullptr) apply_noise(*noise, out.range, n, *rng, op.near_out_of_range_value);
   for (std::uint32_t i = 0; i < n; ++i) {
     real v = out.range[i];
-    if (v > op.max_range) v = op.far_out_of_range_value;
-    else if (v < op.min_range) v = op.near_out_of_range_value;
+    if (v > op.max_range) v = op.far_out_of_range_value;  // two successive rules (Aerial Gym)
+    if (v < op.min_range) v = op.near_out_of_range_value;
     if (op.normalize_range) v = v / op.max_range;
     out.range[i] = v;
   }

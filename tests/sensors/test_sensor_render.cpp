@@ -28,6 +28,7 @@ KTEST(SensorRender, LidarInsideSphereReadsRadiusEverywhere) {
   LidarParams p = lidar_preset_osdome_64();
   p.height = 16;
   p.width = 32;
+  p.range.normalize_range = false;  // metres (the preset normalises)
   RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
   KASSERT_EQ(static_cast<int>(lidar_rays(p, t)), 0);
   SensorPose pose;
@@ -102,6 +103,7 @@ KTEST(SensorRender, CameraDepthIsPlanarAndRangeIsAlongTheRay) {
   CameraParams cp = camera_preset_base();
   cp.height = 18;
   cp.width = 32;
+  cp.range.normalize_range = false;  // metres (the preset normalises)
   RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
   KASSERT_EQ(static_cast<int>(camera_rays(cp, t)), 0);
   SensorPose pose;
@@ -140,19 +142,19 @@ KTEST(SensorRender, DirtySceneAndBadTableAreRefused) {
 }
 
 KTEST(SensorRender, NoiseStatisticsFromFixedSeed) {
-  // Range-dependent model at r = 5: std = 0.01 * 25 + 0.02 * 5 + 0.05 = 0.4, offset 0.1.
+  // Range-dependent model at r = 5: std = 0.01 * 25 + 0.02 * 5 + 0.05 = 0.4, mean_offset -0.1
+  // (Aerial Gym: mean = r - mean_offset = 5.1).
   NoiseParams np;
   np.model = NoiseParams::Model::range_dependent;
   np.a = 0.01_r;
   np.b = 0.02_r;
   np.c = 0.05_r;
-  np.offset = 0.1_r;
+  np.mean_offset = -0.1_r;
   np.pixel_dropout_prob = 0.1_r;
-  np.dropout_value = 0;
   constexpr std::uint32_t n = kMaxRays;
   for (std::uint32_t i = 0; i < n; ++i) g_range[i] = 5;
   RngStream rng(42, 0, kPurposeSensorNoise);
-  KEXPECT_NO_HEAP(apply_noise(np, g_range, n, rng));
+  KEXPECT_NO_HEAP(apply_noise(np, g_range, n, rng, 0));
   double sum = 0, sum2 = 0;
   int kept = 0, dropped = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -172,14 +174,14 @@ KTEST(SensorRender, NoiseStatisticsFromFixedSeed) {
   // Same seed, same values (determinism); multiplier model scales with the value.
   for (std::uint32_t i = 0; i < n; ++i) g_points[i] = 5;
   RngStream rng2(42, 0, kPurposeSensorNoise);
-  apply_noise(np, g_points, n, rng2);
+  apply_noise(np, g_points, n, rng2, 0);
   for (std::uint32_t i = 0; i < n; ++i) KEXPECT_EQ(g_points[i], g_range[i]);
   NoiseParams mp;
   mp.model = NoiseParams::Model::multiplier;
   mp.std_dev_multiplier = 0.02_r;
   for (std::uint32_t i = 0; i < n; ++i) g_range[i] = 10;
   RngStream rng3(7, 1, kPurposeSensorNoise);
-  apply_noise(mp, g_range, n, rng3);
+  apply_noise(mp, g_range, n, rng3, 0);
   sum = sum2 = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
     sum += static_cast<double>(g_range[i]);
@@ -244,7 +246,7 @@ KTEST(SensorImu, HoverGravityBiasNoiseAndSaturation) {
   KEXPECT_NEAR(out.accel_s[2], -9.81, 1e-5);
   // Saturation.
   p.gravity_compensation = false;
-  p.gyro_saturation = 1;
+  p.gyro_saturation = Vec3::Constant(1);
   KASSERT_EQ(static_cast<int>(imu_update(p, s, kIdentity, Vec3::Zero(), Vec3(0, 0, 3), kIdentity, 0.005_r, rng, out)), 0);
   KEXPECT_EQ(out.gyro_s[2], 1);
   KEXPECT_TRUE(out.saturated);
@@ -259,7 +261,7 @@ KTEST(SensorImu, HoverGravityBiasNoiseAndSaturation) {
     sum += static_cast<double>(out.gyro_s[0]);
     sum2 += static_cast<double>(out.gyro_s[0]) * static_cast<double>(out.gyro_s[0]);
   }
-  const double expected_sd = static_cast<double>(b.gyro_noise_density) / std::sqrt(0.005);
+  const double expected_sd = static_cast<double>(b.gyro_noise_density[0]) / std::sqrt(0.005);
   const double m = sum / n;
   KEXPECT_NEAR(std::sqrt(sum2 / n - m * m), expected_sd, 0.05 * expected_sd);
   KEXPECT_NEAR(m, 0, 4 * expected_sd / std::sqrt(static_cast<double>(n)));
@@ -267,7 +269,7 @@ KTEST(SensorImu, HoverGravityBiasNoiseAndSaturation) {
   ImuParams v = imu_preset_vn100();
   RngStream r3(5, 0, kPurposeSensorNoise);
   imu_reset(v, s, r3);
-  for (int k = 0; k < 3; ++k) KEXPECT_LE(std::fabs(s.gyro_bias_s[k]), v.gyro_initial_bias_max);
+  for (int k = 0; k < 3; ++k) KEXPECT_LE(std::fabs(s.gyro_bias_s[k]), v.gyro_initial_bias_max[k]);
   KEXPECT_EQ(static_cast<int>(imu_update(v, s, kIdentity, Vec3::Zero(), Vec3::Zero(), kIdentity, 0, r3, out)),
              static_cast<int>(Status::invalid_argument));
 }

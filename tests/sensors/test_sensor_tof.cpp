@@ -82,6 +82,11 @@ KTEST(SensorTof, Vl53l5cxScanOfSmallScene) {
       const real cc = o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 0.0225_r;
       if (b * b - cc >= 0) take(-b - std::sqrt(b * b - cc), 4);
     }
+    // Beyond max_range: no return (far_out_of_range_value, -1 for this preset) and no segment.
+    if (best > p.range.max_range) {
+      seg = -1;
+      best = p.range.far_out_of_range_value;
+    }
     KEXPECT_EQ(g_tof_seg[i], seg);
     KEXPECT_NEAR(g_tof_range[i], best, 2e-5);
     if (seg >= 0) ++counts[seg];
