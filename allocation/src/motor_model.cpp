@@ -16,17 +16,6 @@ inline real motor_rate(real gain, real target, real x, real max_rate) {
   return clamp(gain * (target - x), -max_rate, max_rate);
 }
 
-/// Integrates x toward target over dt with the chosen scheme; gain and target fixed in the step.
-inline real integrate(MotorIntegrator scheme, real gain, real target, real x, real max_rate, real dt) {
-  const real s1 = motor_rate(gain, target, x, max_rate);
-  if (scheme == MotorIntegrator::euler) return x + dt * s1;
-  const real half_dt = 0.5_r * dt;
-  const real s2 = motor_rate(gain, target, x + half_dt * s1, max_rate);
-  const real s3 = motor_rate(gain, target, x + half_dt * s2, max_rate);
-  const real s4 = motor_rate(gain, target, x + dt * s3, max_rate);
-  return x + (dt / 6.0_r) * (s1 + 2.0_r * s2 + 2.0_r * s3 + s4);
-}
-
 void apply_failure(MotorModelState& state, int i, real scale) {
   state.health_scale[i] = scale;
   if (scale < 1) state.faults.raise(kFaultMotorFailure);
@@ -87,25 +76,27 @@ Status motor_model_reset(const MotorModelConfig& cfg, MotorModelState& state, Rn
   return Status::ok;
 }
 
-Status motor_model_step(const MotorModelConfig& cfg, MotorModelState& state, const real* reference_thrust_N,
-                        real dt_s) {
+namespace {
+
+/// The per-motor loop of motor_model_step, with the rotor-speed choice fixed at compile time: RK4
+/// or explicit Euler on the thrust or on the rotor speed sqrt(f / c); gain and target fixed in
+/// the step.
+template <bool kRps>
+Status step_motors(const MotorModelConfig& cfg, MotorModelState& state, const real* reference_thrust_N, real dt_s) {
+  const bool rk4 = cfg.integrator != MotorIntegrator::euler;
   const int n = state.num_motors;
-  if (n != cfg.num_motors || n < 1 || !is_finite(dt_s) || !(dt_s > 0) || reference_thrust_N == nullptr) {
-    return Status::invalid_argument;
-  }
   Status status = Status::ok;
   // Configuration in locals: the stores into `state` below could alias `cfg` as far as the
   // compiler knows, which would reload every field for every motor.
-  const MotorIntegrator scheme = cfg.integrator;
-  const bool use_rps = cfg.use_rps;
   const bool discrete = cfg.use_discrete_approximation;
   const real thrust_min = cfg.thrust_min_N, thrust_max = cfg.thrust_max_N;
   const real max_rate = cfg.max_rate;
   const real ratio = cfg.thrust_to_torque_m;
   const real half_dt = 0.5_r * dt_s;
+  const real dt_6 = dt_s / 6.0_r;
+  const std::uint16_t pending = state.pending_mask;
   for (int i = 0; i < n; ++i) {
-    if (state.pending_mask != 0 && (state.pending_mask & (1u << i)) != 0 &&
-        state.elapsed_s + half_dt >= state.failure_time_s[i]) {
+    if (pending != 0 && (state.pending_mask & (1u << i)) != 0 && state.elapsed_s + half_dt >= state.failure_time_s[i]) {
       state.pending_mask = static_cast<std::uint16_t>(state.pending_mask & ~(1u << i));
       apply_failure(state, i, state.pending_scale[i]);
     }
@@ -130,18 +121,31 @@ Status motor_model_step(const MotorModelConfig& cfg, MotorModelState& state, con
     const real hi = scale * thrust_max;
     const real r = clamp(ref, lo, hi);
     const real f = state.thrust_N[i];
-    const real tau =
-        (sign0(f) * sign0(r - f) < 0) ? state.time_constant_decreasing_s[i] : state.time_constant_increasing_s[i];
+    // sign0(f) * sign0(r - f) < 0: f and r - f of opposite signs, neither zero (nor NaN).
+    const real e = r - f;
+    const bool decreasing = (f > 0 && e < 0) || (f < 0 && e > 0);
+    const real tau = decreasing ? state.time_constant_decreasing_s[i] : state.time_constant_increasing_s[i];
     const real gain = discrete ? 1.0_r / (dt_s + tau) : 1.0_r / tau;
 
-    real f_new;
-    if (use_rps) {
-      const real c = state.thrust_constant[i];
-      const real w = integrate(scheme, gain, std::sqrt(r / c), std::sqrt(f / c), max_rate, dt_s);
-      f_new = c * w * w;
-    } else {
-      f_new = integrate(scheme, gain, r, f, max_rate, dt_s);
+    real c = 0, target = r, x = f;
+    if constexpr (kRps) {
+      c = state.thrust_constant[i];
+      target = std::sqrt(r / c);
+      x = std::sqrt(f / c);
     }
+    // The clamp is applied inside every RK4 stage (as the reference).
+    const real s1 = motor_rate(gain, target, x, max_rate);
+    real x_new;
+    if (rk4) {
+      const real s2 = motor_rate(gain, target, x + half_dt * s1, max_rate);
+      const real s3 = motor_rate(gain, target, x + half_dt * s2, max_rate);
+      const real s4 = motor_rate(gain, target, x + dt_s * s3, max_rate);
+      x_new = x + dt_6 * (s1 + 2.0_r * s2 + 2.0_r * s3 + s4);
+    } else {
+      x_new = x + dt_s * s1;
+    }
+    real f_new = x_new;
+    if constexpr (kRps) f_new = c * x_new * x_new;
     if (!is_finite(f_new)) {
       // Cannot happen with a validated config and finite state; kept as the last line of defence
       // so the state never holds NaN.
@@ -153,6 +157,18 @@ Status motor_model_step(const MotorModelConfig& cfg, MotorModelState& state, con
   }
   state.elapsed_s += dt_s;
   return status;
+}
+
+}  // namespace
+
+Status motor_model_step(const MotorModelConfig& cfg, MotorModelState& state, const real* reference_thrust_N,
+                        real dt_s) {
+  const int n = state.num_motors;
+  if (n != cfg.num_motors || n < 1 || !is_finite(dt_s) || !(dt_s > 0) || reference_thrust_N == nullptr) {
+    return Status::invalid_argument;
+  }
+  return cfg.use_rps ? step_motors<true>(cfg, state, reference_thrust_N, dt_s)
+                     : step_motors<false>(cfg, state, reference_thrust_N, dt_s);
 }
 
 Status schedule_motor_failure(MotorModelState& state, int motor, real thrust_scale, real at_time_s) {

@@ -13,6 +13,22 @@ enum Axis : int { kFx = 0, kFy = 1, kFz = 2, kTx = 3, kTy = 4, kTz = 5 };
 
 enum class GainSign : std::uint8_t { any, non_positive };
 
+// The rotor loops below run to a compile-time count for the quadrotor (the cascade's airframe):
+// fully unrolled, the thrusts being desaturated stay in FPU registers across every pass and no
+// loop counter is kept (on a Cortex-M4F the instruction count per call roughly halves). Other
+// counts use the same code with a run-time count. The arithmetic and its order are those of the
+// plain loops, so the results are bit-identical between the two.
+template <int kN, typename F>
+__attribute__((always_inline)) inline void for_rotors(int n, F&& body) {
+  if constexpr (kN > 0) {
+#pragma GCC unroll 16
+    for (int i = 0; i < kN; ++i) body(i);
+  } else {
+#pragma GCC unroll 1
+    for (int i = 0; i < n; ++i) body(i);
+  }
+}
+
 /// One desaturation direction: a column of A+ (motor thrust per unit of one wrench axis; the
 /// matrix is column-major, so the column is contiguous).
 struct Direction {
@@ -26,19 +42,24 @@ Direction direction(const AllocationModel& model, int axis) {
   return Direction{&model.pinv(0, axis), 1e-6_r * model.pinv_col_abs_max[axis]};
 }
 
+/// The thrusts being desaturated (a local array: kept in registers when the count is constant).
+template <int kN>
 struct Work {
-  int n;
+  static constexpr int kCount = kN > 0 ? kN : kMaxRotors;
+  int n_rt;
   const real* lo;
   const real* hi;
-  real* f;  // the thrusts being desaturated (the result's array)
+  real f[kCount];
+  int count() const { return kN > 0 ? kN : n_rt; }
 };
 
 /// Gain k along `dir` that removes the worst violation of [lo, hi]: the smallest negative and the
 /// largest positive k that bring each violating motor back to its bound, summed (one of them is
 /// zero unless motors violate both ways, then the sum balances them).
-real desaturation_gain(const Work& w, const Direction& dir, const real* hi) {
+template <int kN>
+inline real desaturation_gain(const Work<kN>& w, const Direction& dir, const real* hi) {
   real k_min = 0, k_max = 0;
-  for (int i = 0; i < w.n; ++i) {
+  for_rotors<kN>(w.count(), [&](int i) __attribute__((always_inline)) {
     const real f = w.f[i];
     real k;
     if (f < w.lo[i]) {
@@ -46,24 +67,26 @@ real desaturation_gain(const Work& w, const Direction& dir, const real* hi) {
     } else if (f > hi[i]) {
       k = hi[i] - f;
     } else {
-      continue;
+      return;
     }
     const real d = dir.d[i];
-    if (!(std::fabs(d) > dir.d_min)) continue;
+    if (!(std::fabs(d) > dir.d_min)) return;
     k /= d;
     k_min = k < k_min ? k : k_min;
     k_max = k > k_max ? k : k_max;
-  }
+  });
   return k_min + k_max;
 }
 
-void shift(Work& w, const Direction& dir, real gain) {
-  for (int i = 0; i < w.n; ++i) w.f[i] += gain * dir.d[i];
+template <int kN>
+inline void shift(Work<kN>& w, const Direction& dir, real gain) {
+  for_rotors<kN>(w.count(), [&](int i) __attribute__((always_inline)) { w.f[i] += gain * dir.d[i]; });
 }
 
 /// Two passes: remove the worst violation, then half of what remains (PX4 desaturateActuators).
 /// `hi` replaces the upper limits (yaw headroom).
-void desaturate(Work& w, const Direction& dir, GainSign sign, const real* hi) {
+template <int kN>
+inline void desaturate(Work<kN>& w, const Direction& dir, GainSign sign, const real* hi) {
   real gain = desaturation_gain(w, dir, hi);
   if (sign == GainSign::non_positive && gain > 0) return;
   if (gain == 0) return;  // nothing violated: the second pass would find nothing either
@@ -72,13 +95,42 @@ void desaturate(Work& w, const Direction& dir, GainSign sign, const real* hi) {
   if (sign == GainSign::non_positive && gain > 0) return;
   shift(w, dir, gain);
 }
-void desaturate(Work& w, const Direction& dir, GainSign sign) { desaturate(w, dir, sign, w.hi); }
+template <int kN>
+inline void desaturate(Work<kN>& w, const Direction& dir, GainSign sign) {
+  desaturate(w, dir, sign, w.hi);
+}
 
-/// f = A+ w (written out: see apply_pinv).
-void mix(Work& w, const PinvMatrix& p, const Vec6& wrench) {
-  const real w0 = wrench(kFx), w1 = wrench(kFy), w2 = wrench(kFz), w3 = wrench(kTx), w4 = wrench(kTy);
-  const real w5 = wrench(kTz);
-  for (int i = 0; i < w.n; ++i) {
+/// Adds yaw, fits it with headroom, then removes the headroom by reducing thrust only.
+template <int kN>
+inline void mix_yaw(Work<kN>& w, const Direction& yaw, const Direction& thrust, real yaw_cmd, real headroom) {
+  shift(w, yaw, yaw_cmd);
+  real hi[Work<kN>::kCount];
+  for_rotors<kN>(w.count(), [&](int i) __attribute__((always_inline)) {
+    hi[i] = w.hi[i] + headroom * (w.hi[i] - w.lo[i]);
+  });
+  desaturate(w, yaw, GainSign::any, hi);
+  desaturate(w, thrust, GainSign::non_positive);
+}
+
+template <int kN>
+Status allocate(const AllocationModel& model, const SequentialDesaturationParams& params, AllocatorState& state,
+                const Vec6& wrench_cmd, AllocationResult& out) {
+  Work<kN> w;
+  w.n_rt = model.num_rotors;
+  w.lo = model.thrust_min_N;
+  w.hi = model.thrust_max_N;
+  const int n = w.count();
+
+  // f = A+ w (written out: see apply_pinv), with the limit check of the fast path. Fast path: the
+  // full pseudo-inverse solution is within limits, so the command is feasible as is and no axis
+  // has to give anything up (the common case in flight). PX4 mixes roll/pitch first even then,
+  // which differs only when adding yaw would bring an out-of-range motor back in range; the exact
+  // answer is kept here.
+  const PinvMatrix& p = model.pinv;
+  const real w0 = wrench_cmd(kFx), w1 = wrench_cmd(kFy), w2 = wrench_cmd(kFz), w3 = wrench_cmd(kTx);
+  const real w4 = wrench_cmd(kTy), w5 = wrench_cmd(kTz);
+  bool feasible = true;
+  for_rotors<kN>(n, [&](int i) __attribute__((always_inline)) {
     real f = p(i, kFx) * w0;
     f += p(i, kFy) * w1;
     f += p(i, kFz) * w2;
@@ -86,39 +138,8 @@ void mix(Work& w, const PinvMatrix& p, const Vec6& wrench) {
     f += p(i, kTy) * w4;
     f += p(i, kTz) * w5;
     w.f[i] = f;
-  }
-}
-
-/// Adds yaw, fits it with headroom, then removes the headroom by reducing thrust only.
-void mix_yaw(Work& w, const Direction& yaw, const Direction& thrust, real yaw_cmd, real headroom) {
-  shift(w, yaw, yaw_cmd);
-  real hi[kMaxRotors];
-  for (int i = 0; i < w.n; ++i) hi[i] = w.hi[i] + headroom * (w.hi[i] - w.lo[i]);
-  desaturate(w, yaw, GainSign::any, hi);
-  desaturate(w, thrust, GainSign::non_positive);
-}
-
-}  // namespace
-
-Status allocate_sequential_desaturation(const AllocationModel& model, const SequentialDesaturationParams& params,
-                                        AllocatorState& state, const Vec6& wrench_cmd, AllocationResult& out) {
-  const int n = model.num_rotors;
-  if (n < 1 || n > kMaxRotors) return Status::invalid_argument;
-  if (!all_finite(wrench_cmd)) return detail::hold_allocation(model, state, out);
-
-  Work w;
-  w.n = n;
-  w.lo = model.thrust_min_N;
-  w.hi = model.thrust_max_N;
-  w.f = out.thrust_N;
-
-  // Fast path: the full pseudo-inverse solution is within limits, so the command is feasible as
-  // is and no axis has to give anything up (the common case in flight). PX4 mixes roll/pitch
-  // first even then, which differs only when adding yaw would bring an out-of-range motor back in
-  // range; the exact answer is kept here.
-  mix(w, model.pinv, wrench_cmd);
-  bool feasible = true;
-  for (int i = 0; i < n; ++i) feasible = feasible && w.f[i] >= w.lo[i] && w.f[i] <= w.hi[i];
+    feasible = feasible && f >= w.lo[i] && f <= w.hi[i];
+  });
 
   if (!feasible) {
     const real headroom = is_finite(params.yaw_headroom) && params.yaw_headroom > 0 ? params.yaw_headroom : real(0);
@@ -145,19 +166,57 @@ Status allocate_sequential_desaturation(const AllocationModel& model, const Sequ
     }
   }
 
+  // Saturation masks (before the clamp), the clamp into the limits (detail::finish_allocation),
+  // the held output and the realized wrench A f, in one pass.
   std::uint16_t low = 0, high = 0;
-  for (int i = 0; i < n; ++i) {
+  real r0 = 0, r1 = 0, r2 = 0, r3 = 0, r4 = 0, r5 = 0;
+  const EffectivenessMatrix& a = model.effectiveness;
+  for_rotors<kN>(n, [&](int i) __attribute__((always_inline)) {
     const real lo = w.lo[i], hi = w.hi[i];
-    if (!(hi > lo)) continue;  // dead motor: reported through the model, not as saturated
-    const real tol = 1e-5_r * (hi - lo);
-    if (w.f[i] <= lo + tol) low = static_cast<std::uint16_t>(low | (1u << i));
-    if (w.f[i] >= hi - tol) high = static_cast<std::uint16_t>(high | (1u << i));
-  }
+    real f = w.f[i];
+    if (hi > lo) {  // else a dead motor: reported through the model, not as saturated
+      const real tol = 1e-5_r * (hi - lo);
+      if (f <= lo + tol) low = static_cast<std::uint16_t>(low | (1u << i));
+      if (f >= hi - tol) high = static_cast<std::uint16_t>(high | (1u << i));
+    }
+    if (!feasible) f = clamp(f, lo, hi);  // feasible: already within [lo, hi]
+    out.thrust_N[i] = f;
+    state.last_thrust_N[i] = f;
+    r0 += a(0, i) * f;
+    r1 += a(1, i) * f;
+    r2 += a(2, i) * f;
+    r3 += a(3, i) * f;
+    r4 += a(4, i) * f;
+    r5 += a(5, i) * f;
+  });
   out.saturated_low_mask = low;
   out.saturated_high_mask = high;
   out.iterations = 0;
-  detail::finish_allocation(model, state, wrench_cmd, out);
+  state.num_rotors = n;
+  out.wrench_realized << r0, r1, r2, r3, r4, r5;
+  out.wrench_unallocated(0) = w0 - r0;
+  out.wrench_unallocated(1) = w1 - r1;
+  out.wrench_unallocated(2) = w2 - r2;
+  out.wrench_unallocated(3) = w3 - r3;
+  out.wrench_unallocated(4) = w4 - r4;
+  out.wrench_unallocated(5) = w5 - r5;
+  if ((low | high) != 0) state.faults.raise(kFaultSaturated);
   return Status::ok;
+}
+
+}  // namespace
+
+Status allocate_sequential_desaturation(const AllocationModel& model, const SequentialDesaturationParams& params,
+                                        AllocatorState& state, const Vec6& wrench_cmd, AllocationResult& out) {
+  const int n = model.num_rotors;
+  if (n < 1 || n > kMaxRotors) return Status::invalid_argument;
+  if (!all_finite(wrench_cmd)) return detail::hold_allocation(model, state, out);
+  switch (n) {
+    case 4:
+      return allocate<4>(model, params, state, wrench_cmd, out);
+    default:
+      return allocate<0>(model, params, state, wrench_cmd, out);
+  }
 }
 
 }  // namespace kestrel::allocation

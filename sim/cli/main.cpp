@@ -11,10 +11,12 @@
 #include <cstring>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
+#include "kestrel/sim/task.hpp"
 #include "kestrel/sim/world.hpp"
 
 using namespace kestrel;
@@ -40,6 +42,43 @@ bool parse_long(const char* s, long long lo, long long& out) {
   char* end = nullptr;
   out = std::strtoll(s, &end, 10);
   return end != s && *end == '\0' && out >= lo;
+}
+
+// An RL task (sim/task.hpp) runs through its step() with a scripted policy that commands the
+// target (action = the observed position error, i.e. the offset of the target from the robot for
+// lee_position_control); the summary reports the task's mean episode reward.
+int run_task(const WorldConfig& cfg, const std::string& label, long long steps) {
+  std::string err;
+  std::unique_ptr<Task> task = make_task(cfg, err);
+  if (!task) {
+    std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+    return 1;
+  }
+  const int n = task->num_envs(), od = task->obs_dim(), ad = task->action_dim();
+  std::printf("kestrel run: %s\n", label.c_str());
+  std::printf("  task %s: %d envs x (%d obs, %d actions), controller %s, env %s, threads %d, seed %" PRIu64
+              ", steps %lld\n", task->name(), n, od, ad, cfg.controller.name.c_str(), cfg.env.name.c_str(),
+              task->world().num_threads(), cfg.seed, steps);
+  std::vector<float> actions(static_cast<std::size_t>(n) * static_cast<std::size_t>(ad), 0.0f);
+  double reward_sum = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long long s = 0; s < steps; ++s) {
+    const float* obs = task->observations();
+    for (int e = 0; e < n; ++e)
+      for (int k = 0; k < 3 && k < ad; ++k)
+        actions[static_cast<std::size_t>(e) * static_cast<std::size_t>(ad) + static_cast<std::size_t>(k)] =
+            obs[static_cast<std::size_t>(e) * static_cast<std::size_t>(od) + static_cast<std::size_t>(k)];
+    task->step(actions.data());
+    for (int e = 0; e < n; ++e) reward_sum += static_cast<double>(task->rewards()[e]);
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const TaskInfos& in = task->infos();
+  std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(steps) * n / secs);
+  std::printf("  episodes %" PRIu64 " (terminated %" PRIu64 ", truncated %" PRIu64 "), mean episode reward %.3f, "
+              "mean step reward %.4f\n", in.episodes, in.terminations, in.truncations, in.mean_episode_reward(),
+              reward_sum / (static_cast<double>(steps) * n));
+  std::printf("state hash: %016" PRIx64 "\n", task->world().state_hash());
+  return 0;
 }
 
 int run(int argc, char** argv) {
@@ -75,6 +114,7 @@ int run(int argc, char** argv) {
   if (envs > 0) cfg.env.num_envs = static_cast<int>(envs);
   if (seed >= 0) cfg.seed = static_cast<std::uint64_t>(seed);
   cfg.num_threads = threads > 0 ? static_cast<int>(threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, scenario.empty() ? "<embedded default>" : scenario, steps);
   std::unique_ptr<World> world = World::create(cfg, err);
   if (!world) {
     std::fprintf(stderr, "kestrel: %s: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str(), err.c_str());

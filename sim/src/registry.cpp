@@ -2,6 +2,7 @@
 // Gym's env configs (empty_env, env_with_obstacles, forest_env, dynamic_env) in spirit and scale
 // (env_with_obstacles: ~45 obstacles), not in every number.
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/task.hpp"
 
 #include <cmath>
 
@@ -137,6 +138,9 @@ void register_builtins(Registries& r) {
   }
 
   r.tasks.add("position_setpoint", "fly to a target drawn per episode; success = within 0.3 m at timeout", [] { return TaskConfig(); });
+  r.tasks.add("position_setpoint_task",
+               "Aerial Gym's RL task: 13 obs, 4 actions, its reward (-20 on crash or d > 8 m); run through sim/task.hpp",
+               [] { return position_setpoint_task_config(); });
   r.tasks.add("hover", "hold the start position", [] {
     TaskConfig t;
     t.name = "hover";

@@ -169,7 +169,8 @@ World::~World() = default;
 
 void World::generate_layout(int env, RngStream& rng) {
   const Vec3 lo = lower_w_[env], hi = upper_w_[env], span = hi - lo;
-  Obstacle* slots = &obstacles_[static_cast<std::size_t>(env) * obstacle_capacity_];
+  // data() + offset, not &v[i]: the empty environment has no obstacle slots (capacity 0).
+  Obstacle* slots = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   int n = 0;
   const real level = cfg_.env.curriculum_level;
   for (std::size_t ci = 0; ci < cfg_.env.assets.size(); ++ci) {
@@ -462,7 +463,7 @@ void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_actio
 }
 
 void World::move_obstacles(int env) {
-  Obstacle* o = &obstacles_[static_cast<std::size_t>(env) * obstacle_capacity_];
+  Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   const int n = num_obstacles_[env];
   const real dt = cfg_.sim.dt_s;
   const Vec3 lo = lower_w_[env], hi = upper_w_[env];
@@ -492,7 +493,7 @@ void World::move_obstacles(int env) {
 
 void World::collide_robots(int env) {
   const SimParams& sp = cfg_.sim;
-  const Obstacle* o = &obstacles_[static_cast<std::size_t>(env) * obstacle_capacity_];
+  const Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   const int n = num_obstacles_[env];
   for (int r = 0; r < robots_per_env_; ++r) {
     const std::size_t i = index(env, r);
@@ -591,7 +592,7 @@ void World::env_step(int env) {
     real d = 0;
     for (int r = 0; r < robots_per_env_; ++r) d += (target_w_[index(env, r)] - state_[index(env, r)].position_w).norm();
     es.final_distance_sum_m += static_cast<double>(d) / robots_per_env_;
-    reset_env(env);
+    if (auto_reset_) reset_env(env);
   }
 }
 

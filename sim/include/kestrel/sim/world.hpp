@@ -108,6 +108,9 @@ class World {
 
   /// Resets one environment now (what a crash, timeout or out-of-bounds does at step end).
   void reset_env(int env);
+  /// false: step() still flags crashes and counts timeouts/exits but never resets an environment;
+  /// the owner (a Task, sim/task.hpp) resets after computing its reward on the final state.
+  void set_auto_reset(bool on) { auto_reset_ = on; }
   /// Obstacle-count curriculum level in [0, 1]; takes effect at each environment's next layout.
   void set_curriculum_level(real level) { cfg_.env.curriculum_level = level; }
 
@@ -184,6 +187,7 @@ class World {
   // Threads: static partition, pending env-steps for run_slice.
   std::unique_ptr<ThreadPool> pool_;
   int pending_steps_ = 0;
+  bool auto_reset_ = true;
 };
 
 /// Robots per asset link: a tree is a trunk and this many branches (one obstacle slot each).

@@ -1,0 +1,121 @@
+// Reinforcement-learning tasks over the batched World, shaped like Aerial Gym's task API
+// (ntnu-arl/aerial_gym_simulator, commit f0d0f05: aerial_gym/task/base_task.py and
+// task/position_setpoint_task/position_setpoint_task.py): reset(), reset_idx(env_ids) and
+// step(actions) -> (observations, rewards, terminations, truncations, infos), with the auto-reset
+// inside step: an environment that ends is reset before step() returns and its row of the
+// observations holds the first observation of the new episode (Aerial Gym's
+// return_state_before_reset = False), while its reward and flags describe the step that ended it.
+//
+// The results live in flat, row-major buffers owned by the task and rewritten in place by every
+// call (Aerial Gym's task_obs dict tensors are updated in place too), so a caller reads them
+// without copies: observations() is num_envs x obs_dim floats, rewards() num_envs floats,
+// terminations()/truncations() num_envs bytes (0/1). step() does not allocate
+// (tests/sim/task_test.cpp checks it with the heap counter).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kestrel/kernel/types.hpp"
+#include "kestrel/sim/config.hpp"
+#include "kestrel/sim/world.hpp"
+
+namespace kestrel::sim {
+
+/// Aerial Gym's `infos` is an empty dict in this task; here it carries the running episode
+/// statistics instead (summed over every episode finished since the task was built).
+struct TaskInfos {
+  std::uint64_t steps = 0;          // task steps taken
+  std::uint64_t episodes = 0;       // episodes finished (terminated or truncated)
+  std::uint64_t terminations = 0;   // of which terminated (contact crash, out of bounds, d > 8 m)
+  std::uint64_t truncations = 0;    // of which truncated only (episode length reached)
+  double episode_reward_sum = 0;    // sum over finished episodes of the episode's summed reward
+  double mean_episode_reward() const { return episodes > 0 ? episode_reward_sum / static_cast<double>(episodes) : 0; }
+};
+
+class Task {
+ public:
+  virtual ~Task();
+  Task(const Task&) = delete;
+  Task& operator=(const Task&) = delete;
+
+  virtual const char* name() const = 0;
+  int num_envs() const { return num_envs_; }
+  int obs_dim() const { return obs_dim_; }
+  int action_dim() const { return action_dim_; }
+
+  /// Resets every environment; observations() then holds the first observations, rewards and
+  /// flags are zero (Aerial Gym's reset() returning the tuple).
+  virtual void reset() = 0;
+  /// Resets the listed environments only (their observation rows are rewritten).
+  virtual void reset_idx(const int* env_ids, int count) = 0;
+  /// One task step: `actions` is num_envs x action_dim floats (row-major).
+  virtual void step(const float* actions) = 0;
+
+  const float* observations() const { return obs_.data(); }
+  const float* rewards() const { return rewards_.data(); }
+  const std::uint8_t* terminations() const { return terminations_.data(); }
+  const std::uint8_t* truncations() const { return truncations_.data(); }
+  const TaskInfos& infos() const { return infos_; }
+
+  World& world() { return *world_; }
+  const World& world() const { return *world_; }
+
+ protected:
+  Task(std::unique_ptr<World> world, int obs_dim, int action_dim);
+  std::unique_ptr<World> world_;
+  int num_envs_ = 0, obs_dim_ = 0, action_dim_ = 0;
+  std::vector<float> obs_, rewards_;
+  std::vector<std::uint8_t> terminations_, truncations_;
+  TaskInfos infos_;
+};
+
+/// Builds the task named by config.task.name (registered in registries().tasks; today only
+/// "position_setpoint_task"). Returns nullptr and a message for an unknown task or a bad config.
+std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error);
+/// True if config.task.name names a Task (rather than the World's built-in scripted tasks).
+bool is_rl_task(const std::string& task_name);
+
+// ---- position_setpoint_task ---------------------------------------------------------------------
+
+/// Aerial Gym's position_setpoint_task reward (compute_reward in position_setpoint_task.py at
+/// commit f0d0f05; golden/README.md section rewards.json), as a pure float32 function of one
+/// environment's inputs:
+///   d = |pos_error|; pos = 3 exp(-8 d^2) + 2 exp(-4 d^2); dist = (20 - d)/40;
+///   tilt = |1 - (world-z component of the body z axis)|, up = 0.2/(0.1 + tilt^2);
+///   s = |body angular velocity|, spin = 3/(1 + s^2);
+///   reward = multiplier (pos + dist + pos (up + spin)).
+/// Then crash becomes 1 where d > 8 (written in place, existing 1s stay) and the reward is -20
+/// wherever crash > 0. The reference takes the task config's reward parameters, linear velocity
+/// and the actions but uses none of them (golden/README.md quirk 15), so they are not parameters.
+/// pos_error_vehicle = target - position rotated into the yaw-only vehicle frame (see below).
+float position_setpoint_reward(const float pos_error_vehicle[3], const float quat_xyzw[4], const float body_angvel[3],
+                               float curriculum_multiplier, std::uint8_t& crash);
+
+/// target - position (world frame) rotated into the vehicle frame (inverse rotation by the yaw-only
+/// quaternion of `quat_xyzw`), as the task does before calling the reward.
+void vehicle_frame_error(const float quat_xyzw[4], const float err_world[3], float out[3]);
+
+/// Position setpoint task: one robot per environment flies to the target the World drew at reset.
+///   observations (13): [target - position (world), orientation quaternion xyzw,
+///                       body-frame linear velocity, body-frame angular velocity]
+///     (Aerial Gym's process_obs_for_task; its target is the world origin, ours the per-episode
+///     target, placed at the centre of the bounds by the registered config).
+///   actions (4): clipped to +-10 as Aerial Gym's robot does (no scaling, quirk 7), then
+///     - lee_position_control: [dx, dy, dz, yaw] -> setpoint = current position + (dx, dy, dz),
+///       yaw absolute. Aerial Gym's position setpoint is absolute with the target at the origin;
+///       a setpoint relative to the robot keeps a zero action meaning "hold here" wherever the
+///       target is, and the scripted policy "fly to the target" is simply action = obs[0:3].
+///     - any other controller: passed through unchanged (Aerial Gym's semantics; its shipped
+///       config uses lee_attitude_control).
+///   terminations: contact crash (World, force > threshold), out of bounds (World's 0.5 m margin)
+///     or d > 8 m (the reward's crash rule); truncations: episode_len_env_steps env-steps reached
+///     (Aerial Gym truncates at sim_steps > episode_len_steps, i.e. one step later).
+std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std::string& error);
+
+/// The registered config of position_setpoint_task (registries().tasks "position_setpoint_task").
+TaskConfig position_setpoint_task_config();
+
+}  // namespace kestrel::sim

@@ -1,0 +1,204 @@
+// Task base and position_setpoint_task (see task.hpp for the API and the reference it follows).
+#include "kestrel/sim/task.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "kestrel/kernel/quaternion.hpp"
+
+namespace kestrel::sim {
+
+Task::~Task() = default;
+
+Task::Task(std::unique_ptr<World> world, int obs_dim, int action_dim)
+    : world_(std::move(world)), num_envs_(world_->num_envs()), obs_dim_(obs_dim), action_dim_(action_dim) {
+  const std::size_t n = static_cast<std::size_t>(num_envs_);
+  obs_.assign(n * static_cast<std::size_t>(obs_dim_), 0.0f);
+  rewards_.assign(n, 0.0f);
+  terminations_.assign(n, 0);
+  truncations_.assign(n, 0);
+}
+
+// The arithmetic below follows the reference's float32 TorchScript expression order
+// (position_setpoint_task.py compute_reward / exp_func, utils/math.py quat_rotate), built with
+// -ffp-contract=off so no fused multiply-add changes a rounding.
+float position_setpoint_reward(const float e[3], const float q[4], const float w[3], float multiplier,
+                               std::uint8_t& crash) {
+  const float d = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  // exp_func(x, gain, exp) = gain * exp(-exp * x * x)
+  const float pos = 3.0f * std::exp(-8.0f * d * d) + 2.0f * std::exp(-4.0f * d * d);
+  const float dist = (20.0f - d) / 40.0f;
+  // quat_axis(q, 2)[2] via quat_rotate(q, e_z): a + b + c with a = v (2 w^2 - 1),
+  // b = 2 w (q_vec x v) (zero z component for v = e_z), c = 2 q_vec (q_vec . v).
+  const float qw = q[3];
+  const float up_z = (2.0f * qw * qw - 1.0f) + 0.0f + q[2] * q[2] * 2.0f;
+  const float tilt = std::fabs(1.0f - up_z);
+  const float up = 0.2f / (0.1f + tilt * tilt);
+  const float s = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  const float spin = 3.0f / (1.0f + s * s);
+  float reward = multiplier * (pos + dist + pos * (up + spin));
+  if (d > 8.0f) crash = 1;  // in place; an existing crash stays
+  if (crash > 0) reward = -20.0f;
+  return reward;
+}
+
+void vehicle_frame_error(const float q[4], const float err[3], float out[3]) {
+  // Yaw as the reference's get_euler_xyz: atan2(2(wz + xy), w^2 + x^2 - y^2 - z^2); the vehicle
+  // frame is the rotation about world z by that yaw, so its inverse rotation is Rz(-yaw).
+  const float x = q[0], y = q[1], z = q[2], w = q[3];
+  const float yaw = std::atan2(2.0f * (w * z + x * y), w * w + x * x - y * y - z * z);
+  const float c = std::cos(yaw), s = std::sin(yaw);
+  out[0] = c * err[0] + s * err[1];
+  out[1] = -s * err[0] + c * err[1];
+  out[2] = err[2];
+}
+
+namespace {
+
+constexpr int kPsObsDim = 13;
+constexpr int kPsActionDim = 4;
+constexpr float kActionClip = 10.0f;  // Aerial Gym robot: actions clipped to +-10 (quirk 7)
+
+class PositionSetpointTask final : public Task {
+ public:
+  explicit PositionSetpointTask(std::unique_ptr<World> w)
+      : Task(std::move(w), kPsObsDim, kPsActionDim), episode_reward_(static_cast<std::size_t>(num_envs_), 0.0) {
+    // The task decides when an episode ends (its d > 8 m rule is not the World's), so the World
+    // only flags; the reward must see the state before the reset.
+    world_->set_auto_reset(false);
+    relative_ = world_->config().controller.kind == ControllerKind::lee_position;
+    len_ = world_->config().task.episode_len_env_steps;
+    reset();
+  }
+
+  const char* name() const override { return "position_setpoint_task"; }
+
+  void reset() override {
+    for (int env = 0; env < num_envs_; ++env) reset_one(env);
+  }
+
+  void reset_idx(const int* env_ids, int count) override {
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
+  }
+
+  void step(const float* actions) override {
+    for (int env = 0; env < num_envs_; ++env) {
+      const float* in = actions + static_cast<std::size_t>(env) * kPsActionDim;
+      real* a = world_->action(env, 0);
+      float c[kPsActionDim];
+      for (int k = 0; k < kPsActionDim; ++k) c[k] = std::min(kActionClip, std::max(-kActionClip, in[k]));
+      if (relative_) {
+        const Vec3& p = world_->robot_state(env, 0).position_w;
+        for (int k = 0; k < 3; ++k) a[k] = p[k] + static_cast<real>(c[k]);
+        a[3] = static_cast<real>(c[3]);
+      } else {
+        for (int k = 0; k < kPsActionDim; ++k) a[k] = static_cast<real>(c[k]);
+      }
+    }
+    world_->step(1);
+    ++infos_.steps;
+    for (int env = 0; env < num_envs_; ++env) {
+      const RigidBodyState& st = world_->robot_state(env, 0);
+      Vec3 lo, hi;
+      world_->lower_upper_bounds(env, lo, hi);
+      bool out = false;  // the World's out-of-bounds rule (0.5 m margin, see World::env_step)
+      for (int k = 0; k < 3; ++k) out = out || !(st.position_w[k] >= lo[k] - 0.5_r && st.position_w[k] <= hi[k] + 0.5_r);
+      std::uint8_t crash = (world_->crashed(env, 0) || out) ? 1 : 0;
+      float q[4], e_w[3], e_v[3], w[3];
+      state_inputs(env, q, e_w, w);
+      vehicle_frame_error(q, e_w, e_v);
+      const float r = position_setpoint_reward(e_v, q, w, 1.0f, crash);  // multiplier 1.0 as the task passes
+      rewards_[static_cast<std::size_t>(env)] = r;
+      terminations_[static_cast<std::size_t>(env)] = crash;
+      const std::uint8_t trunc = world_->episode_step(env) >= len_ ? 1 : 0;
+      truncations_[static_cast<std::size_t>(env)] = trunc;
+      episode_reward_[static_cast<std::size_t>(env)] += static_cast<double>(r);
+      if (crash || trunc) {
+        ++infos_.episodes;
+        if (crash) ++infos_.terminations;
+        else ++infos_.truncations;
+        infos_.episode_reward_sum += episode_reward_[static_cast<std::size_t>(env)];
+        episode_reward_[static_cast<std::size_t>(env)] = 0;
+        world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
+      }
+      write_obs(env);
+    }
+  }
+
+ private:
+  void reset_one(int env) {
+    world_->reset_env(env);
+    const std::size_t i = static_cast<std::size_t>(env);
+    rewards_[i] = 0;
+    terminations_[i] = 0;
+    truncations_[i] = 0;
+    episode_reward_[i] = 0;
+    write_obs(env);
+  }
+
+  void state_inputs(int env, float q[4], float e_w[3], float w[3]) const {
+    const RigidBodyState& st = world_->robot_state(env, 0);
+    const Vec3 e = world_->target(env, 0) - st.position_w;
+    const auto& qc = st.orientation_wb.coeffs();  // Eigen stores xyzw
+    for (int k = 0; k < 4; ++k) q[k] = static_cast<float>(qc[k]);
+    for (int k = 0; k < 3; ++k) e_w[k] = static_cast<float>(e[k]);
+    for (int k = 0; k < 3; ++k) w[k] = static_cast<float>(st.angvel_b[k]);
+  }
+
+  // Aerial Gym process_obs_for_task: [target - position, quaternion xyzw, body linvel, body angvel].
+  void write_obs(int env) {
+    const RigidBodyState& st = world_->robot_state(env, 0);
+    float* o = &obs_[static_cast<std::size_t>(env) * kPsObsDim];
+    float w[3];
+    state_inputs(env, o + 3, o, w);
+    const Vec3 v_b = rotate_inverse(st.orientation_wb, st.linvel_w);
+    for (int k = 0; k < 3; ++k) o[7 + k] = static_cast<float>(v_b[k]);
+    for (int k = 0; k < 3; ++k) o[10 + k] = w[k];
+  }
+
+  std::vector<double> episode_reward_;
+  bool relative_ = false;
+  int len_ = 0;
+};
+
+}  // namespace
+
+TaskConfig position_setpoint_task_config() {
+  TaskConfig t;
+  t.name = "position_setpoint_task";
+  t.kind = TaskKind::position_setpoint;
+  t.episode_len_env_steps = 500;  // Aerial Gym position_setpoint_task_config.episode_len_steps
+  // Aerial Gym's target is the world origin, the middle of its empty env in x and y; here the
+  // target is the centre of the (per-reset) bounds, so starts drawn in the robot's ratio box stay
+  // well inside the reward's 8 m crash radius.
+  t.min_target_ratio = Vec3(0.5_r, 0.5_r, 0.5_r);
+  t.max_target_ratio = Vec3(0.5_r, 0.5_r, 0.5_r);
+  t.setpoint_speed_m_s = 0;  // the policy's action is the setpoint
+  return t;
+}
+
+bool is_rl_task(const std::string& task_name) { return task_name == "position_setpoint_task"; }
+
+std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std::string& error) {
+  if (config.robot.robots_per_env != 1) {
+    error = "position_setpoint_task needs robots_per_env = 1";
+    return nullptr;
+  }
+  if (config.task.kind != TaskKind::position_setpoint) {
+    error = "position_setpoint_task needs a position_setpoint task kind (per-episode targets)";
+    return nullptr;
+  }
+  std::unique_ptr<World> w = World::create(config, error);
+  if (!w) return nullptr;
+  return std::unique_ptr<Task>(new PositionSetpointTask(std::move(w)));
+}
+
+std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error) {
+  if (config.task.name == "position_setpoint_task") return make_position_setpoint_task(config, error);
+  error = "unknown task '" + config.task.name + "' (tasks: position_setpoint_task)";
+  return nullptr;
+}
+
+}  // namespace kestrel::sim
