@@ -13,6 +13,13 @@ void println(const char* s) {
   console_write("\n", 1);
 }
 
+void print_hex32(std::uint32_t v) {
+  const char* hex = "0123456789abcdef";
+  char buf[10] = {'0', 'x'};
+  for (int i = 0; i < 8; ++i) buf[2 + i] = hex[(v >> (28 - 4 * i)) & 0xfu];
+  console_write(buf, sizeof(buf));
+}
+
 void print_uint(std::uint64_t v) {
   char buf[24];
   int n = 0;

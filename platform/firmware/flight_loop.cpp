@@ -139,11 +139,8 @@ void print_report(const FlightConfig& c, const FlightReport& r, const char* targ
   print_fixed(static_cast<double>(r.final_error_m) * 1000.0, 3);
   print(" mm, all states finite: ");
   println(r.finite ? "yes" : "NO");
-  print("  fault flags: 0x");
-  const char* hex = "0123456789abcdef";
-  char buf[8];
-  for (int i = 0; i < 8; ++i) buf[i] = hex[(r.faults >> (28 - 4 * i)) & 0xfu];
-  console_write(buf, 8);
+  print("  fault flags: ");
+  print_hex32(r.faults);
   println("");
   const double n = r.steps > 0 ? static_cast<double>(r.steps) : 1.0;
   print("  cost per control step (controller + allocation + motor model): ");

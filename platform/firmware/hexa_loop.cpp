@@ -345,11 +345,8 @@ void hexa_print_report(const HexaConfig& c, const HexaReport& r, const char* tar
   print_m(" mm, yaw error ", r.final_yaw_error_rad, 4);
   print(" rad, all finite: ");
   println(r.finite ? "yes" : "NO");
-  print("  fault flags: 0x");
-  const char* hex = "0123456789abcdef";
-  char buf[8];
-  for (int i = 0; i < 8; ++i) buf[i] = hex[(r.faults >> (28 - 4 * i)) & 0xfu];
-  console_write(buf, 8);
+  print("  fault flags: ");
+  print_hex32(r.faults);
   println("");
   const double n = r.ticks > 0 ? static_cast<double>(r.ticks) : 1.0;
   print("  per scheduler tick (sensors + control + allocation + motors): mean ");

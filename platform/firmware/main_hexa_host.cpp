@@ -1,16 +1,13 @@
 // Host build of the hexarotor firmware example: the same loop as the MCU image, timed with the
 // steady clock (reported, never asserted: the host is shared and noisy).
-#include <chrono>
 #include <cstdio>
 
 #include "hexa_loop.hpp"
 #include "kestrel/platform/console.hpp"
+#include "loop_clock.hpp"
 
 namespace {
-std::uint64_t now_ns() {
-  return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
-}
+using kestrel::firmware::loop_clock::now_ns;
 }  // namespace
 
 int main() {

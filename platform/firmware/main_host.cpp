@@ -1,15 +1,12 @@
 // Host build of the firmware example: the same loop, timed with the steady clock.
-#include <chrono>
 #include <cstdio>
 
 #include "flight_loop.hpp"
 #include "kestrel/platform/console.hpp"
+#include "loop_clock.hpp"
 
 namespace {
-std::uint64_t now_ns() {
-  return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
-}
+using kestrel::firmware::loop_clock::now_ns;
 }  // namespace
 
 int main() {

@@ -6,23 +6,14 @@
 
 #include "flight_loop.hpp"
 #include "kestrel/platform/board.hpp"
+#include "loop_clock.hpp"
 #include "kestrel/platform/console.hpp"
 
 namespace board = kestrel::platform::board;
 
 namespace {
-volatile std::uint32_t g_ticks_pending = 0;
-
-void on_control_tick() { g_ticks_pending = g_ticks_pending + 1u; }
-
-void wait_for_tick() {
-  while (g_ticks_pending == 0u) {
-    __asm volatile("wfi");
-  }
-  g_ticks_pending = g_ticks_pending - 1u;
-}
-
-std::uint64_t now_ticks() { return board::systick_now(); }
+using kestrel::firmware::loop_clock::now_ticks;
+using kestrel::firmware::loop_clock::wait_for_tick;
 
 // Static: the whole control stack lives in .bss, sized at link time.
 kestrel::firmware::FlightStack g_stack;
@@ -32,9 +23,7 @@ kestrel::firmware::Plant g_plant;
 int main() {
   using namespace kestrel::firmware;
   const FlightConfig config;
-  const std::uint32_t reload =
-      static_cast<std::uint32_t>(static_cast<float>(board::kCoreClockHz) / config.control_rate_hz + 0.5f) - 1u;
-  board::systick_start(reload, &on_control_tick);
+  kestrel::firmware::loop_clock::start_ticks(config.control_rate_hz);
   FlightReport report;
   if (fly(config, g_stack, g_plant, &now_ticks, &wait_for_tick, report) != kestrel::Status::ok) {
     kestrel::platform::println("firmware example: initialisation failed");

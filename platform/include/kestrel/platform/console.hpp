@@ -19,5 +19,7 @@ void print_fixed(double v, int decimals);
 /// Scientific notation with `digits` significant digits (e.g. 1.234e-05).
 void print_sci(double v, int digits);
 void println(const char* s = "");
+/// "0x" and eight lower-case hex digits (fault-flag words).
+void print_hex32(std::uint32_t v);
 
 }  // namespace kestrel::platform

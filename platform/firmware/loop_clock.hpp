@@ -1,0 +1,45 @@
+// Clocks and tick pacing shared by the firmware examples' mains.
+// Host: the steady clock in nanoseconds (costs are reported, never asserted: the host is shared).
+// Cortex-M: SysTick interrupts pace the loop (the core sleeps in WFI between ticks) and SysTick
+// ticks time it; under QEMU -icount shift=0 one tick is exactly 40 instructions.
+#pragma once
+
+#include <cstdint>
+
+#if defined(KESTREL_PLATFORM_CORTEX_M)
+#include "kestrel/platform/board.hpp"
+
+namespace kestrel::firmware::loop_clock {
+namespace detail {
+inline volatile std::uint32_t g_ticks_pending = 0;
+inline void on_tick() { g_ticks_pending = g_ticks_pending + 1u; }
+}  // namespace detail
+
+/// Starts SysTick so that wait_for_tick() returns at `rate_hz`.
+inline void start_ticks(float rate_hz) {
+  namespace board = kestrel::platform::board;
+  const std::uint32_t reload = static_cast<std::uint32_t>(static_cast<float>(board::kCoreClockHz) / rate_hz + 0.5f) - 1u;
+  board::systick_start(reload, &detail::on_tick);
+}
+
+/// Sleeps until the next tick (a tick that already passed returns at once: no tick is lost).
+inline void wait_for_tick() {
+  while (detail::g_ticks_pending == 0u) {
+    __asm volatile("wfi");
+  }
+  detail::g_ticks_pending = detail::g_ticks_pending - 1u;
+}
+
+inline std::uint64_t now_ticks() { return kestrel::platform::board::systick_now(); }
+}  // namespace kestrel::firmware::loop_clock
+
+#else
+#include <chrono>
+
+namespace kestrel::firmware::loop_clock {
+inline std::uint64_t now_ns() {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+}
+}  // namespace kestrel::firmware::loop_clock
+#endif
