@@ -1,5 +1,6 @@
 // kestrel: the desktop harness's command line.
-//   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR
+//   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR [--image-env E]
+//   (with sensors in the scenario, DIR also gets env E's sensor images: sensor_<name>_*.png)
 //   kestrel list
 // With no scenario, `run` uses the embedded default (1024 quadrotors, position setpoints, forest).
 #include <sys/stat.h>
@@ -26,7 +27,7 @@ namespace {
 
 int usage() {
   std::fprintf(stderr,
-               "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--quiet]\n"
+               "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
                "       kestrel list\n");
   return 2;
 }
@@ -83,7 +84,7 @@ int run_task(const WorldConfig& cfg, const std::string& label, long long steps) 
 
 int run(int argc, char** argv) {
   std::string scenario, out_dir = "kestrel_out";
-  long long envs = -1, steps = 1000, threads = -1, seed = -1;
+  long long envs = -1, steps = 1000, threads = -1, seed = -1, image_env = 0;
   bool quiet = false;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
@@ -98,6 +99,7 @@ int run(int argc, char** argv) {
     else if (a == "--steps") value(1, steps);
     else if (a == "--threads") value(1, threads);
     else if (a == "--seed") value(0, seed);
+    else if (a == "--image-env") value(0, image_env);
     else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
     else if (a == "--quiet") quiet = true;
     else if (!a.empty() && a[0] != '-' && scenario.empty()) scenario = a;
@@ -127,6 +129,12 @@ int run(int argc, char** argv) {
               cfg.controller.name.c_str(), cfg.task.name.c_str());
   std::printf("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
               world->obstacle_capacity(), world->num_threads(), cfg.seed, steps);
+  for (int k = 0; k < world->num_sensors(); ++k) {
+    const SensorConfig& sc = world->sensor_config(k);
+    if (sc.kind == SensorKind::imu) std::printf("  sensor %s: IMU, every physics step\n", sc.name.c_str());
+    else std::printf("  sensor %s: %s %d x %d, every %d env-step(s)\n", sc.name.c_str(), sc.kind == SensorKind::camera ? "camera" : "lidar",
+                     world->sensor_height(k), world->sensor_width(k), sc.every_env_steps);
+  }
   std::printf("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
   // Progress bar on long runs (stderr, so the summary on stdout stays clean to compare).
@@ -169,6 +177,14 @@ int run(int argc, char** argv) {
     return 1;
   }
   std::printf("  wrote %s/trajectory.csv, %s/envs.csv, %s/trajectory.png\n", out_dir.c_str(), out_dir.c_str(), out_dir.c_str());
+  if (world->num_sensors() > 0) {
+    std::vector<std::string> images;
+    if (!write_sensor_pngs(*world, static_cast<int>(image_env), out_dir, images, err)) {
+      std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+      return 1;
+    }
+    for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), image_env);
+  }
   std::printf("state hash: %016" PRIx64 "\n", world->state_hash());
   return 0;
 }

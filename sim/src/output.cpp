@@ -2,6 +2,7 @@
 
 #include <png.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -69,6 +70,31 @@ struct Canvas {
 };
 }  // namespace
 
+bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) {
+    error = path + ": cannot write";
+    return false;
+  }
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(f);
+    error = path + ": PNG encoding failed";
+    return false;
+  }
+  png_init_io(png, f);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(W), static_cast<png_uint_32>(H), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int y = 0; y < H; ++y) png_write_row(png, const_cast<png_bytep>(&rgb[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) * 3]));
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  std::fclose(f);
+  return true;
+}
+
 bool write_trajectory_png(const World& world, const std::string& path, std::string& error) {
   const int W = 640, H = 480, M = 20;
   Canvas cv(W, H);
@@ -99,26 +125,54 @@ bool write_trajectory_png(const World& world, const std::string& path, std::stri
       if ((a - b).norm() > 1) continue;  // a reset: do not draw the jump back to the start
       cv.line(px(a[0]), py(a[1]), px(b[0]), py(b[1]), palette[e % 6]);
     }
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    error = path + ": cannot write";
+  return write_png_rgb(path, W, H, cv.rgb.data(), error);
+}
+
+bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,
+                       std::string& error) {
+  if (env < 0 || env >= world.num_envs()) {
+    error = "image env " + std::to_string(env) + " out of range [0, " + std::to_string(world.num_envs()) + ")";
     return false;
   }
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png_create_info_struct(png);
-  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    std::fclose(f);
-    error = path + ": PNG encoding failed";
-    return false;
+  for (int k = 0; k < world.num_sensors(); ++k) {
+    const SensorConfig& c = world.sensor_config(k);
+    if (c.kind == SensorKind::imu) continue;
+    const int W = world.sensor_width(k), H = world.sensor_height(k);
+    const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+    const bool cam = c.kind == SensorKind::camera;
+    const sensors::RangeOutputParams& rp = cam ? c.camera.range : c.lidar.range;
+    const bool depth = cam && c.camera.calculate_depth;
+    // Grey = value / max_range in [0, 1] (normalised outputs are already divided); out-of-range
+    // values (negative, or the far value) clamp to black / white.
+    const real* r = world.sensor_ranges(env, k);
+    std::vector<unsigned char> grey(n * 3), seg(n * 3);
+    for (std::size_t i = 0; i < n; ++i) {
+      const real v = rp.normalize_range ? r[i] : r[i] / rp.max_range;
+      const real c01 = std::min(1_r, std::max(0_r, v));
+      const unsigned char g = static_cast<unsigned char>(std::lround(255 * static_cast<double>(c01)));
+      grey[3 * i] = grey[3 * i + 1] = grey[3 * i + 2] = g;
+    }
+    // Segmentation: black without a hit, grey for the ground (id 0), a hashed colour per id.
+    const std::int32_t* sg = world.sensor_segmentation(env, k);
+    for (std::size_t i = 0; i < n; ++i) {
+      unsigned char* px = &seg[3 * i];
+      if (sg[i] < 0) {
+        px[0] = px[1] = px[2] = 0;
+      } else if (sg[i] == 0) {
+        px[0] = px[1] = px[2] = 128;
+      } else {
+        const std::uint32_t h = static_cast<std::uint32_t>(sg[i]) * 2654435761u;  // Knuth's multiplicative hash
+        px[0] = static_cast<unsigned char>(64 + (h >> 24) % 192);
+        px[1] = static_cast<unsigned char>(64 + (h >> 16) % 192);
+        px[2] = static_cast<unsigned char>(64 + (h >> 8) % 192);
+      }
+    }
+    const std::string base = dir + "/sensor_" + c.name;
+    const std::string range_path = base + (depth ? "_depth.png" : "_range.png"), seg_path = base + "_segmentation.png";
+    if (!write_png_rgb(range_path, W, H, grey.data(), error) || !write_png_rgb(seg_path, W, H, seg.data(), error)) return false;
+    written.push_back(range_path);
+    written.push_back(seg_path);
   }
-  png_init_io(png, f);
-  png_set_IHDR(png, info, W, H, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(png, info);
-  for (int y = 0; y < H; ++y) png_write_row(png, &cv.rgb[static_cast<std::size_t>(y) * W * 3]);
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
-  std::fclose(f);
   return true;
 }
 

@@ -56,9 +56,53 @@ EnvConfig obstacle_env(const char* name) {
   return e;
 }
 
+SensorConfig lidar_sensor(const char* name, const sensors::LidarParams& p) {
+  SensorConfig c;
+  c.name = name;
+  c.kind = SensorKind::lidar;
+  c.lidar = p;
+  return c;
+}
+SensorConfig camera_sensor(const char* name, const sensors::CameraParams& p) {
+  SensorConfig c;
+  c.name = name;
+  c.kind = SensorKind::camera;
+  c.camera = p;
+  return c;
+}
+SensorConfig imu_sensor(const char* name, const sensors::ImuParams& p) {
+  SensorConfig c;
+  c.name = name;
+  c.kind = SensorKind::imu;
+  c.imu = p;
+  return c;
+}
+
+// The sensor presets of kestrel/sensors (each reproduces one Aerial Gym sensor config class).
+void register_sensors(Registry<SensorConfig>& s) {
+  namespace ks = kestrel::sensors;
+  s.add("base_lidar", "lidar 128 x 512, v -45..45 deg, 0.2-10 m", [] { return lidar_sensor("base_lidar", ks::lidar_preset_base()); });
+  s.add("osdome_64", "Ouster OSDome lidar 64 x 512, v 0..90 deg, 0.5-20 m", [] { return lidar_sensor("osdome_64", ks::lidar_preset_osdome_64()); });
+  s.add("os0_128", "Ouster OS0 lidar 128 x 512, v -45..45 deg, 0.2-35 m", [] { return lidar_sensor("os0_128", ks::lidar_preset_os0_128()); });
+  s.add("os0_64", "Ouster OS0 lidar 64 x 512", [] { return lidar_sensor("os0_64", ks::lidar_preset_os0_64()); });
+  s.add("os1_64", "Ouster OS1 lidar 64 x 512, v -22.5..22.5 deg, 0.7-90 m", [] { return lidar_sensor("os1_64", ks::lidar_preset_os1_64()); });
+  s.add("os2_64", "Ouster OS2 lidar 64 x 512, v -11.25..11.25 deg, 0.7-200 m", [] { return lidar_sensor("os2_64", ks::lidar_preset_os2_64()); });
+  s.add("rs_airy", "RoboSense Airy lidar 48 x 120, hemisphere, pitched down", [] { return lidar_sensor("rs_airy", ks::lidar_preset_rs_airy()); });
+  s.add("pmd_flexx2", "pmd flexx2 ToF 172 x 224, 56 x 44 deg, 0.2-5 m", [] { return lidar_sensor("pmd_flexx2", ks::lidar_preset_pmd_flexx2()); });
+  s.add("vl53l5cx", "ST VL53L5CX multizone ToF 8 x 8, 90 x 90 deg, 0.2-4 m", [] { return lidar_sensor("vl53l5cx", ks::lidar_preset_vl53l5cx()); });
+  s.add("base_depth_camera", "depth camera 135 x 240, hfov 87 deg, 0.2-10 m", [] { return camera_sensor("base_depth_camera", ks::camera_preset_base()); });
+  s.add("d455", "Intel RealSense D455 depth 270 x 480, hfov 87 deg, 0.2-15 m", [] { return camera_sensor("d455", ks::camera_preset_d455()); });
+  s.add("oakd", "Luxonis OAK-D depth 270 x 480, hfov 72 deg, 0.7-12 m", [] { return camera_sensor("oakd", ks::camera_preset_oakd()); });
+  s.add("oakd_pro_w", "Luxonis OAK-D Pro W depth 270 x 480, hfov 127 deg, 0.2-12 m", [] { return camera_sensor("oakd_pro_w", ks::camera_preset_oakd_pro_w()); });
+  s.add("base_imu", "IMU (Aerial Gym base_imu_config)", [] { return imu_sensor("base_imu", ks::imu_preset_base()); });
+  s.add("vn100", "VectorNav VN-100 IMU", [] { return imu_sensor("vn100", ks::imu_preset_vn100()); });
+  s.add("bmi088", "Bosch BMI088 IMU", [] { return imu_sensor("bmi088", ks::imu_preset_bmi088()); });
+}
+
 }  // namespace
 
 void register_builtins(Registries& r) {
+  register_sensors(r.sensors);
   r.sims.add("base_sim", "dt 0.01 s, 1 substep, gravity (0, 0, -9.81)", [] { return SimParams(); });
   r.sims.add("fast_sim", "dt 0.005 s, 1 substep", [] {
     SimParams s;

@@ -222,11 +222,16 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir) {
     c.task.placement_attempts = get_int(task["placement_attempts"], "task.placement_attempts", 1);
   if (task.IsMap() && task["episode_len_env_steps"]) c.task.episode_len_env_steps = get_int(task["episode_len_env_steps"], "task.episode_len_env_steps", 1);
   if (task.IsMap() && task["success_radius_m"]) c.task.success_radius_m = get_real(task["success_radius_m"], "task.success_radius_m", 0, 1e6);
+  // Sensors attach to the robot: `sensors: [base_depth_camera, {name: vl53l5cx, every: 2}]`.
   if (const YAML::Node s = root["sensors"]) {
-    if (!s.IsSequence()) bad("sensors", "expected a list of sensor names");
+    if (!s.IsSequence()) bad("sensors", "expected a list of sensor names or {name, every} maps");
     for (std::size_t i = 0; i < s.size(); ++i) {
-      SensorConfig sc = lookup(registries().sensors, s[i].Scalar(), "sensors");
-      c.sensors.push_back(sc.name);
+      const std::string field = "sensors[" + std::to_string(i) + "]";
+      if (!s[i].IsScalar() && !s[i].IsMap()) bad(field, "expected a sensor name or a map with `name`");
+      SensorConfig sc = lookup(registries().sensors, section_name(s[i], field), "sensors");
+      check_keys(s[i], field, {"every"});
+      if (s[i].IsMap() && s[i]["every"]) sc.every_env_steps = get_int(s[i]["every"], field + ".every", 1);
+      c.robot.sensors.push_back(sc);
     }
   }
   if (root["seed"]) c.seed = static_cast<std::uint64_t>(get_int(root["seed"], "seed", 0));

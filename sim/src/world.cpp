@@ -157,6 +157,10 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   w->layout_generation_.assign(ne, 0);
   w->stats_.assign(ne, EnvStats());
   w->obstacles_.assign(ne * static_cast<std::size_t>(cap), Obstacle());
+  {
+    std::string serr;
+    if (!w->setup_sensors(serr)) return fail(serr);
+  }
   for (int env = 0; env < w->num_envs_; ++env) {
     w->reset_env(env);
     w->stats_[env].resets = 0;  // the initial reset is not counted
@@ -412,7 +416,23 @@ void World::reset_env(int env) {
     contact_torque_b_[i] = Vec3::Zero();
     crashed_[i] = 0;
   }
+  // Sensor placement per reset (Aerial Gym's randomize_placement) from the placement stream, so
+  // the reset stream (layout, start, target) is the same with or without sensors.
+  for (int r = 0; r < robots_per_env_; ++r) {
+    const std::size_t i = index(env, r);
+    for (std::size_t k = 0; k < sensors_.size(); ++k) {
+      SensorSlot& s = sensors_[k];
+      if (s.kind == SensorKind::imu) {
+        sensors::imu_reset(cfg_.robot.sensors[k].imu, s.imu_state[i], rng_sensor_[static_cast<std::size_t>(env)]);
+        s.imu[i] = sensors::ImuSample();
+      } else {
+        s.mounts[i] = sensors::sample_mount(s.mount, rng_place_[static_cast<std::size_t>(env)]);
+      }
+    }
+  }
   ++stats_[env].resets;
+  // The new episode's first observation sees the new layout and start.
+  if (any_ray_sensor_) render_ray_sensors(env, true);
 }
 
 void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_action) {
@@ -537,7 +557,11 @@ void World::collide_robots(int env) {
 }
 
 void World::physics_step(int env, bool use_new_action) {
-  for (int r = 0; r < robots_per_env_; ++r) robot_dynamics(env, r, index(env, r), use_new_action);
+  for (int r = 0; r < robots_per_env_; ++r) {
+    const Vec3 v0 = state_[index(env, r)].linvel_w;
+    robot_dynamics(env, r, index(env, r), use_new_action);
+    if (any_imu_) update_imus(env, r, v0);
+  }
   move_obstacles(env);
   collide_robots(env);
 }
@@ -592,8 +616,12 @@ void World::env_step(int env) {
     real d = 0;
     for (int r = 0; r < robots_per_env_; ++r) d += (target_w_[index(env, r)] - state_[index(env, r)].position_w).norm();
     es.final_distance_sum_m += static_cast<double>(d) / robots_per_env_;
-    if (auto_reset_) reset_env(env);
+    if (auto_reset_) {
+      reset_env(env);  // renders the new episode's first images
+      return;
+    }
   }
+  if (any_ray_sensor_) render_ray_sensors(env, false);
 }
 
 void World::run_slice(int worker) {
@@ -674,6 +702,19 @@ std::uint64_t World::state_hash() const {
       f.pod(crashed_[i]);
     }
     for (int k = 0; k < num_obstacles_[env]; ++k) f.v3(obstacle(env, k).shape.position_w);
+    // Sensor outputs (absent without sensors, so sensor-free hashes are unchanged).
+    for (const SensorSlot& sl : sensors_) {
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = index(env, r);
+        if (sl.kind == SensorKind::imu) {
+          f.v3(sl.imu[i].accel_s);
+          f.v3(sl.imu[i].gyro_s);
+        } else {
+          f.bytes(&sl.ranges[i * sl.pixels], sizeof(real) * sl.pixels);
+          f.bytes(&sl.segmentation[i * sl.pixels], sizeof(std::int32_t) * sl.pixels);
+        }
+      }
+    }
     f.pod(episode_step_[env]);
     f.pod(stats_[env].resets);
     f.pod(stats_[env].crashes);
@@ -681,12 +722,186 @@ std::uint64_t World::state_hash() const {
   return f.h;
 }
 
+bool World::setup_sensors(std::string& error) {
+  const std::size_t nr = static_cast<std::size_t>(num_envs_) * static_cast<std::size_t>(robots_per_env_);
+  const std::size_t ne = static_cast<std::size_t>(num_envs_);
+  sensors_.resize(cfg_.robot.sensors.size());
+  for (std::size_t k = 0; k < sensors_.size(); ++k) {
+    const SensorConfig& c = cfg_.robot.sensors[k];
+    SensorSlot& s = sensors_[k];
+    s.kind = c.kind;
+    s.every = c.every_env_steps;
+    if (c.every_env_steps < 1) {
+      error = "robot.sensors." + c.name + ": every must be a positive integer";
+      return false;
+    }
+    if (c.kind == SensorKind::imu) {
+      any_imu_ = true;
+      s.imu_state.assign(nr, sensors::ImuState());
+      s.imu.assign(nr, sensors::ImuSample());
+      continue;
+    }
+    any_ray_sensor_ = true;
+    const bool cam = c.kind == SensorKind::camera;
+    const std::uint32_t h = cam ? c.camera.height : c.lidar.height, wd = cam ? c.camera.width : c.lidar.width;
+    s.pixels = static_cast<std::size_t>(h) * wd;
+    s.dirs_s.assign(3 * s.pixels, 0);
+    s.depth_scale.assign(s.pixels, 1);
+    s.table.dirs_s = s.dirs_s.data();
+    s.table.depth_scale = s.depth_scale.data();
+    s.table.capacity = static_cast<std::uint32_t>(s.pixels);
+    const Status st = cam ? sensors::camera_rays(c.camera, s.table) : sensors::lidar_rays(c.lidar, s.table);
+    if (st != Status::ok || s.pixels == 0) {
+      error = "robot.sensors." + c.name + ": invalid ray pattern";
+      return false;
+    }
+    s.depth = cam && c.camera.calculate_depth;
+    s.range = cam ? c.camera.range : c.lidar.range;
+    s.noise = cam ? c.camera.noise : c.lidar.noise;
+    s.mount = cam ? c.camera.mount : c.lidar.mount;
+    s.ranges.assign(nr * s.pixels, 0);
+    s.segmentation.assign(nr * s.pixels, sensors::kNoHitSegment);
+    s.mounts.assign(nr, sensors::Mount());
+  }
+  if (any_ray_sensor_) {
+    // Every obstacle slot plus the ground plane; storage never reallocates after this.
+    scene_capacity_ = static_cast<std::uint32_t>(obstacle_capacity_) + 1;
+    const std::size_t nodes = sensors::bvh_node_capacity(scene_capacity_);
+    scene_objects_.assign(ne * scene_capacity_, sensors::SceneObject());
+    scene_nodes_.assign(ne * nodes, sensors::BvhNode());
+    scene_prim_index_.assign(ne * scene_capacity_, 0);
+    scene_bvh_objects_.assign(ne * scene_capacity_, 0);
+    scene_boxes_.assign(ne * scene_capacity_, sensors::Aabb());
+    scenes_.reserve(ne);
+    for (std::size_t e = 0; e < ne; ++e) {
+      const std::size_t o = e * scene_capacity_;
+      scenes_.emplace_back(&scene_objects_[o], scene_capacity_, &scene_nodes_[e * nodes], static_cast<std::uint32_t>(nodes),
+                           &scene_prim_index_[o], &scene_boxes_[o], &scene_bvh_objects_[o]);
+    }
+  }
+  rng_place_.resize(ne);
+  rng_sensor_.resize(ne);
+  for (std::size_t i = 0; i < ne; ++i) {
+    rng_place_[i] = RngStream(cfg_.seed, static_cast<std::uint32_t>(i), kPurposePlacement);
+    rng_sensor_[i] = RngStream(cfg_.seed, static_cast<std::uint32_t>(i), kPurposeSensorNoise);
+  }
+  return true;
+}
+
+void World::update_scene(int env) {
+  // Rebuilt from the obstacle slots rather than moved with set_pose: a reset may change the
+  // layout (other shapes, other count) and move_obstacles re-sorts the slots, so slot i is not
+  // always the same object. clear/add/build write only the caller storage (no heap) and cost
+  // microseconds for tens of obstacles, far below one image.
+  sensors::Scene& sc = scenes_[static_cast<std::size_t>(env)];
+  sc.clear();
+  if (cfg_.env.create_ground_plane) {
+    const real gz = lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r;  // the plane collide_robots uses
+    (void)sc.add(sensors::Shape::plane(), Vec3(0, 0, gz), Quat::Identity(), 0);
+  }
+  for (int k = 0; k < num_obstacles_[env]; ++k) {
+    const Obstacle& o = obstacle(env, k);
+    const Shape& s = o.shape;
+    sensors::Shape rs;
+    Vec3 p = s.position_w;
+    switch (s.type) {
+      case ShapeType::sphere: rs = sensors::Shape::sphere(s.radius_m); break;
+      case ShapeType::box: rs = sensors::Shape::box(s.half_extents_m[0], s.half_extents_m[1], s.half_extents_m[2]); break;
+      case ShapeType::capsule: rs = sensors::Shape::capsule(s.radius_m, s.half_length_m); break;
+      case ShapeType::cylinder: rs = sensors::Shape::cylinder(s.radius_m, s.half_length_m); break;
+      case ShapeType::convex_hull: {
+        // Mesh obstacles render as the box of their hull's body-frame bounds (no triangle mesh is
+        // kept for the hull; a box needs no extra set-up storage).
+        Vec3 mn = Vec3::Constant(1e30_r), mx = Vec3::Constant(-1e30_r);
+        for (int v = 0; v < s.num_vertices; ++v) {
+          mn = mn.cwiseMin(s.vertices[v]);
+          mx = mx.cwiseMax(s.vertices[v]);
+        }
+        if (s.num_vertices == 0) continue;
+        const Vec3 half = ((mx - mn) / 2).cwiseMax(Vec3::Constant(1e-4_r));
+        rs = sensors::Shape::box(half[0], half[1], half[2]);
+        p += rotate(s.orientation_wb, Vec3((mn + mx) / 2));
+        break;
+      }
+    }
+    (void)sc.add(rs, p, s.orientation_wb, static_cast<std::uint32_t>(o.semantic_id));
+  }
+  (void)sc.build();
+}
+
+void World::render_ray_sensors(int env, bool all) {
+  const std::uint64_t n = stats_[env].env_steps;
+  bool any = false;
+  for (const SensorSlot& s : sensors_)
+    any = any || (s.kind != SensorKind::imu && (all || n % static_cast<std::uint64_t>(s.every) == 0));
+  if (!any) return;
+  update_scene(env);
+  const sensors::Scene& sc = scenes_[static_cast<std::size_t>(env)];
+  for (SensorSlot& s : sensors_) {
+    if (s.kind == SensorKind::imu || !(all || n % static_cast<std::uint64_t>(s.every) == 0)) continue;
+    for (int r = 0; r < robots_per_env_; ++r) {
+      const std::size_t i = index(env, r);
+      const sensors::SensorPose pose = sensors::sensor_pose(state_[i], s.mounts[i]);
+      sensors::SensorOutput out;
+      out.range = &s.ranges[i * s.pixels];
+      out.segmentation = &s.segmentation[i * s.pixels];
+      (void)sensors::render(sc, pose, s.table, s.range, s.depth, out, &s.noise, &rng_sensor_[static_cast<std::size_t>(env)]);
+    }
+  }
+}
+
+void World::render_sensors(int env) {
+  if (any_ray_sensor_) render_ray_sensors(env, true);
+}
+
+void World::update_imus(int env, int robot, const Vec3& linvel_before_w) {
+  const std::size_t i = index(env, robot);
+  const RigidBodyState& st = state_[i];
+  const real dt = cfg_.sim.dt_s;
+  // Acceleration over the physics step from the velocity change: it contains every force the
+  // integrator applied (thrust, drag, contact, disturbance, gravity), as a force sensor would.
+  const Vec3 acc_w = (st.linvel_w - linvel_before_w) / dt;
+  for (std::size_t k = 0; k < sensors_.size(); ++k) {
+    SensorSlot& s = sensors_[k];
+    if (s.kind != SensorKind::imu) continue;
+    (void)sensors::imu_update(cfg_.robot.sensors[k].imu, s.imu_state[i], st.orientation_wb, acc_w, st.angvel_b, Quat::Identity(), dt,
+                              rng_sensor_[static_cast<std::size_t>(env)], s.imu[i]);
+  }
+}
+
+const real* World::sensor_ranges(int env, int sensor, int robot) const {
+  const SensorSlot& s = sensors_[static_cast<std::size_t>(sensor)];
+  return s.kind == SensorKind::imu ? nullptr : &s.ranges[index(env, robot) * s.pixels];
+}
+const std::int32_t* World::sensor_segmentation(int env, int sensor, int robot) const {
+  const SensorSlot& s = sensors_[static_cast<std::size_t>(sensor)];
+  return s.kind == SensorKind::imu ? nullptr : &s.segmentation[index(env, robot) * s.pixels];
+}
+const sensors::ImuSample& World::imu_sample(int env, int sensor, int robot) const {
+  static const sensors::ImuSample kZero{};
+  const SensorSlot& s = sensors_[static_cast<std::size_t>(sensor)];
+  return s.kind == SensorKind::imu ? s.imu[index(env, robot)] : kZero;
+}
+const sensors::Mount& World::sensor_mount(int env, int sensor, int robot) const {
+  static const sensors::Mount kIdentity{};
+  const SensorSlot& s = sensors_[static_cast<std::size_t>(sensor)];
+  return s.kind == SensorKind::imu ? kIdentity : s.mounts[index(env, robot)];
+}
+
 std::size_t World::bytes_per_env() const {
   const std::size_t per_robot = sizeof(RigidBodyState) + sizeof(ControllerState) + sizeof(al::AllocatorState) +
                                 sizeof(al::MotorModelState) + 2 * kMaxActionDim * sizeof(real) + 3 * sizeof(Vec3) + 1;
   const std::size_t per_env = 2 * sizeof(RngStream) + 2 * sizeof(Vec3) + 6 * sizeof(int) + sizeof(std::uint32_t) +
                               sizeof(EnvStats) + static_cast<std::size_t>(obstacle_capacity_) * sizeof(Obstacle);
-  return per_env + per_robot * static_cast<std::size_t>(robots_per_env_);
+  std::size_t sensor_per_robot = 0;
+  for (const SensorSlot& sl : sensors_)
+    sensor_per_robot += sl.kind == SensorKind::imu ? sizeof(sensors::ImuState) + sizeof(sensors::ImuSample)
+                                                   : sl.pixels * (sizeof(real) + sizeof(std::int32_t)) + sizeof(sensors::Mount);
+  const std::size_t scene = any_ray_sensor_ ? sizeof(sensors::Scene) + static_cast<std::size_t>(scene_capacity_) *
+                                                  (sizeof(sensors::SceneObject) + 2 * sizeof(std::uint32_t) + sizeof(sensors::Aabb)) +
+                                                  sensors::bvh_node_capacity(scene_capacity_) * sizeof(sensors::BvhNode)
+                                            : 0;
+  return per_env + scene + (per_robot + sensor_per_robot) * static_cast<std::size_t>(robots_per_env_);
 }
 
 }  // namespace kestrel::sim

@@ -97,3 +97,30 @@ TEST(SimWorldMultiThread, NoHeapInsideStepOnAnyThread) {
     }
   }
 }
+
+TEST(SimWorldMultiThread, NoHeapInsideStepWithSensorsOnAnyThread) {
+  // A depth camera, a ToF and an IMU on two robots per env: scenes rebuilt and images rendered
+  // on the workers, resets re-drawing mounts, all without the heap.
+  for (const char* env : {"forest", "dynamic"}) {
+    WorldConfig c;
+    ASSERT_TRUE(registries().envs.make(env, c.env));
+    c.env.num_envs = 9;
+    c.num_threads = 2;
+    c.seed = 5;
+    c.robot.robots_per_env = 2;
+    c.task.episode_len_env_steps = 40;
+    for (const char* s : {"base_depth_camera", "vl53l5cx", "bmi088"}) {
+      SensorConfig sc;
+      ASSERT_TRUE(registries().sensors.make(s, sc));
+      c.robot.sensors.push_back(sc);
+    }
+    std::string err;
+    auto w = World::create(c, err);
+    ASSERT_TRUE(w) << err;
+    w->step(1);
+    const std::size_t before = g_allocations.load();
+    w->step(60);
+    EXPECT_EQ(g_allocations.load() - before, 0u) << env;
+    EXPECT_GT(w->summary().resets, 0u) << env;
+  }
+}

@@ -12,6 +12,8 @@
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
 #include "kestrel/kernel/types.hpp"
+#include "kestrel/sensors/imu.hpp"
+#include "kestrel/sensors/ray_sensor.hpp"
 
 namespace kestrel::sim {
 
@@ -89,6 +91,21 @@ struct EnvConfig {
   std::vector<AssetClass> assets;   // include_asset_type: the classes present
 };
 
+/// One sensor attached to the robot (sensors registry entry; Aerial Gym's robot config
+/// sensor_config: enable_camera / camera_config, enable_lidar / lidar_config, enable_imu / imu_config).
+/// The ToF (VL53L5CX) is a small lidar grid, so it is a lidar here too.
+enum class SensorKind : std::uint8_t { lidar = 0, camera, imu };
+struct SensorConfig {
+  std::string name;
+  SensorKind kind = SensorKind::camera;
+  sensors::LidarParams lidar;    // kind lidar
+  sensors::CameraParams camera;  // kind camera
+  sensors::ImuParams imu;        // kind imu
+  // Ray sensors render every `every_env_steps` env-steps (a 30 Hz camera on a 100 Hz env-step
+  // loop); the IMU updates every physics step whatever this says (it integrates the dynamics).
+  int every_env_steps = 1;
+};
+
 /// Robot config: dynamics, airframe, motors, controller, collision shape.
 struct RobotConfig {
   std::string name = "base_quadrotor";
@@ -106,6 +123,7 @@ struct RobotConfig {
   Vec3 max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0.9_r);
   real max_init_yaw_rad = kPi;
   bool use_desaturation = true;  // sequential desaturation; false: Aerial Gym's clamped pinv
+  std::vector<SensorConfig> sensors;  // none by default: the default run renders nothing
 };
 
 /// Controller config: registry name -> kind; gains come from the robot (mass, inertia).
@@ -149,7 +167,6 @@ struct WorldConfig {
   RobotConfig robot;
   ControllerConfig controller;
   TaskConfig task;
-  std::vector<std::string> sensors;  // sensor registry names (none built in yet)
   std::uint64_t seed = 0;
   int num_threads = 1;
 };

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "kestrel/sim/world.hpp"
 
@@ -15,5 +16,13 @@ namespace kestrel::sim {
 /// trajectory.png: x-y paths (top view) of the traced environments over the env bounds, with
 /// the obstacles of environment 0 outlined by their AABBs.
 [[nodiscard]] bool write_trajectory_png(const World& world, const std::string& path, std::string& error);
+
+/// RGB image (W x H, row-major, 3 bytes per pixel) as an 8-bit PNG.
+[[nodiscard]] bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error);
+/// For every ray sensor of robot 0 of environment `env`: dir/sensor_<name>_range.png (lidar, or a
+/// camera without depth) or _depth.png (depth camera), grey = value / max_range, and
+/// dir/sensor_<name>_segmentation.png (colour per id). Paths written are appended to `written`.
+[[nodiscard]] bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,
+                                     std::string& error);
 
 }  // namespace kestrel::sim

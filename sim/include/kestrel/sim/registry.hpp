@@ -56,11 +56,6 @@ class Registry {
   std::map<std::string, Entry> entries_;
 };
 
-/// Sensors registry entry (the sensor core lands separately; none is built in yet).
-struct SensorConfig {
-  std::string name;
-};
-
 struct Registries {
   Registry<SimParams> sims;
   Registry<EnvConfig> envs;

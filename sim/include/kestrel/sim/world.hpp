@@ -28,6 +28,9 @@
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/config.hpp"
 #include "kestrel/sim/thread_pool.hpp"
+#include "kestrel/sensors/imu.hpp"
+#include "kestrel/sensors/ray_sensor.hpp"
+#include "kestrel/sensors/scene.hpp"
 
 namespace kestrel::sim {
 
@@ -127,6 +130,27 @@ class World {
   int trace_length() const { return trace_len_; }
   const Vec3& trace_point(int env, int k) const { return trace_[static_cast<std::size_t>(env) * trace_cap_ + k]; }
 
+  // Sensors in the loop (config().robot.sensors; sensor index = position in that list). Ray
+  // sensors (lidar, ToF, camera) render against the environment's obstacles every `every_env_steps`
+  // env-steps and at every reset; IMUs update every physics step. Read-only views, valid until
+  // the next step(); per robot, row-major images (row 0 = top).
+  int num_sensors() const { return static_cast<int>(sensors_.size()); }
+  const SensorConfig& sensor_config(int sensor) const { return cfg_.robot.sensors[static_cast<std::size_t>(sensor)]; }
+  /// Image size of a ray sensor (0 x 0 for an IMU).
+  int sensor_height(int sensor) const { return static_cast<int>(sensors_[static_cast<std::size_t>(sensor)].table.height); }
+  int sensor_width(int sensor) const { return static_cast<int>(sensors_[static_cast<std::size_t>(sensor)].table.width); }
+  /// Range image (depth for a depth camera), post-processed as the sensor config says; null for an IMU.
+  const real* sensor_ranges(int env, int sensor, int robot = 0) const;
+  /// Segmentation image (obstacle semantic id, 0 ground, -1 no hit); null for an IMU.
+  const std::int32_t* sensor_segmentation(int env, int sensor, int robot = 0) const;
+  /// Latest IMU measurement (zero sample for a ray sensor).
+  const sensors::ImuSample& imu_sample(int env, int sensor, int robot = 0) const;
+  /// Mount drawn at the environment's last reset.
+  const sensors::Mount& sensor_mount(int env, int sensor, int robot = 0) const;
+  /// Rebuilds the environment's scene from its obstacles and renders every ray sensor now
+  /// (what step() does; no heap). For tests and owners that move robots or obstacles by hand.
+  void render_sensors(int env);
+
   /// Worker entry (public for the thread pool's trampoline).
   void run_slice(int worker);
 
@@ -142,6 +166,29 @@ class World {
   bool overlaps_obstacle(int env, const Shape& s) const;
   bool clear_point(int env, const Vec3& p) const;
   bool clear_segment(int env, const Vec3& a, const Vec3& b) const;
+  void update_scene(int env);
+  void render_ray_sensors(int env, bool all);
+  void update_imus(int env, int robot, const Vec3& linvel_before_w);
+  bool setup_sensors(std::string& error);
+
+  // One attached sensor: constant ray table plus per-robot outputs, mounts and IMU state (all
+  // sized at set-up; indexed by robot index env * robots_per_env + r).
+  struct SensorSlot {
+    SensorKind kind = SensorKind::camera;
+    int every = 1;
+    bool depth = false;
+    sensors::RangeOutputParams range;
+    sensors::NoiseParams noise;
+    sensors::MountParams mount;
+    std::vector<real> dirs_s, depth_scale;
+    sensors::RayTable table;
+    std::size_t pixels = 0;
+    std::vector<real> ranges;                 // robots x pixels
+    std::vector<std::int32_t> segmentation;   // robots x pixels
+    std::vector<sensors::Mount> mounts;       // robots
+    std::vector<sensors::ImuState> imu_state; // robots (IMU)
+    std::vector<sensors::ImuSample> imu;      // robots (IMU)
+  };
 
   WorldConfig cfg_;
   int num_envs_ = 0, robots_per_env_ = 0, obstacle_capacity_ = 0;
@@ -178,6 +225,18 @@ class World {
 
   std::vector<Obstacle> obstacles_;  // (num_envs x obstacle_capacity)
   std::vector<std::vector<Vec3>> mesh_vertices_;  // per asset class (AssetKind::mesh), set-up only
+
+  // Sensors: per-environment scenes over caller storage (scene_capacity_ objects each: the
+  // obstacle slots plus the ground plane), the streams of placement and sensor noise.
+  std::vector<SensorSlot> sensors_;
+  bool any_ray_sensor_ = false, any_imu_ = false;
+  std::uint32_t scene_capacity_ = 0;
+  std::vector<sensors::SceneObject> scene_objects_;
+  std::vector<sensors::BvhNode> scene_nodes_;
+  std::vector<std::uint32_t> scene_prim_index_, scene_bvh_objects_;
+  std::vector<sensors::Aabb> scene_boxes_;
+  std::vector<sensors::Scene> scenes_;
+  std::vector<RngStream> rng_place_, rng_sensor_;
 
   // Trace.
   std::vector<Vec3> trace_;
