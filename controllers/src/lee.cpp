@@ -1,7 +1,8 @@
 // Lee geometric controllers: T. Lee, M. Leok, N. H. McClamroch, "Geometric tracking control of a
 // quadrotor UAV on SE(3)", IEEE CDC 2010 — as implemented by Aerial Gym (see lee.hpp).
 //
-// Cost notes (the whole cascade has ~1,500 instructions per step on a Cortex-M4F):
+// Cost notes (the Cortex-M4F cascade budget: Lee position + allocation + motor model <= ~1,500
+// instructions per step):
 //  - the state quaternion is turned into a rotation matrix once; yaw, body z, and the Euler-rate
 //    map all come out of that matrix without trig (attitude_frame());
 //  - the Euler yaw rate r maps to the body rate r * (third row of R): that row is
@@ -10,12 +11,18 @@
 //    sines are ratios of force components;
 //  - trig is called only on commanded angles (heading, attitude roll/pitch), never on the state;
 //  - no matrix inverse anywhere; rotation errors use E = R^T R_d directly;
-//  - finite checks of inputs and outputs are branch-free sums (nonfinite_probe()).
-// Measured on the emulated Cortex-M4F (QEMU -icount, -O2, through update_controller()): about
-// 410 instructions for lee_rates, 730-860 for the position-type controllers and the ROV, 900 for
-// lee_attitude with newlib's sinf + cosf; kestrel::sin_cos (kernel math.hpp: Cephes polynomials,
-// Cody-Waite reduction shared by sine and cosine) took ~25 instructions off each commanded angle
-// and ~3.8 KB of newlib's Payne-Hanek reduction off the firmware's flash.
+//  - finite checks of inputs and outputs are branch-free sums (nonfinite_probe());
+//  - e_R reads only the six off-diagonal entries of E (column dot products), E w_d is R^T (R_d w_d)
+//    and is skipped where w_d = 0; w x J w takes 3 products with a diagonal J (flag set by
+//    lee_reset); R_d's quaternion is Shepperd's method written out;
+//  - the update path's helpers are forced inline, so R, R_d and intermediates stay in registers;
+//  - update_lee_position checks the state once, through the output probe (see there).
+// Measured on the emulated Cortex-M4F (QEMU -icount, -O2; bench/results/cortex-m4f/control.csv):
+// update_lee_position 370 instructions per call (775 before the inlining and the partial E),
+// ~380 for lee_rates, 490-620 for the other controllers (through update_controller()).
+// kestrel::sin_cos (kernel math.hpp: Cephes polynomials, Cody-Waite reduction shared by sine and
+// cosine, octant 0 inlined) replaces newlib's sinf + cosf (~160 instructions per angle and ~3.8 KB
+// of Payne-Hanek reduction in the firmware's flash).
 #include "kestrel/controllers/lee.hpp"
 
 #include <cmath>
@@ -27,6 +34,14 @@
 namespace kestrel {
 namespace {
 
+// The helpers of the update path are forced inline: at -O2 GCC keeps the larger ones out of line,
+// and every call then spills R, R_d and the returned vectors through the stack (measured: ~150 of
+// update_lee_position's instructions on the Cortex-M4F were such loads, stores and call set-up).
+// The price is flash: every controller carries its own copy (~6 KB more in the C API image,
+// bench/results/cortex-m4f/memory.csv); out-of-line cold paths were tried and cost instructions.
+#define KESTREL_LEE_INLINE __attribute__((always_inline)) inline
+
+
 // Below |F| = 1e-6 N the collective force has no usable direction (the reference divides by |F|
 // and produces NaN at exactly zero). Any real thrust command is orders of magnitude above this.
 constexpr real kMinForceSq = 1e-12_r;  // N^2
@@ -37,7 +52,7 @@ constexpr real kMinCrossSq = 1e-10_r;
 constexpr real kMinQuatNormSq = 1e-12_r;
 
 // Rotation matrix of q as given (not re-normalised, like the reference).
-inline Mat3 rotation_of(const Quat& q) {
+KESTREL_LEE_INLINE Mat3 rotation_of(const Quat& q) {
   const real x = q.x(), y = q.y(), z = q.z(), w = q.w();
   const real xx = x * x, yy = y * y, zz = z * z;
   const real xy = x * y, xz = x * z, yz = y * z;
@@ -88,7 +103,7 @@ inline Vec3 clamp_body_yaw_rate(const Vec3& w_d, real max_radps) {
 //  - |F| ~ 0: keep the current thrust axis (no attitude change is better than a random one);
 //  - heading ~ parallel to b3: keep the current heading (project body x), and if body x is also
 //    along b3, use -body z, which is the minimal rotation in that case (about body y).
-inline bool rotation_from_force_heading(const Vec3& f_w, real cos_psi, real sin_psi, const Mat3& r_wb, Mat3& r_d) {
+KESTREL_LEE_INLINE bool rotation_from_force_heading(const Vec3& f_w, real cos_psi, real sin_psi, const Mat3& r_wb, Mat3& r_d) {
   bool singular = false;
   Vec3 b3;
   const real f2 = f_w.squaredNorm();
@@ -117,23 +132,94 @@ inline bool rotation_from_force_heading(const Vec3& f_w, real cos_psi, real sin_
   return singular;
 }
 
-// w x (J w), written out (Eigen's cross() is not always inlined on the MCU).
-inline Vec3 gyroscopic(const Mat3& j_b, const Vec3& w) {
-  const Vec3 jw = j_b * w;
-  return Vec3(w[1] * jw[2] - w[2] * jw[1], w[2] * jw[0] - w[0] * jw[2], w[0] * jw[1] - w[1] * jw[0]);
+// w x (J w), written out (Eigen's cross() is not always inlined on the MCU). With a diagonal J
+// (LeeState::inertia_diagonal) J w is three products: the skipped terms are 0 * w_k with w finite
+// (accept() checked it), so the bits are those of the full product.
+KESTREL_LEE_INLINE Vec3 gyroscopic(const Mat3& j_b, bool j_diagonal, const Vec3& w) {
+  real jw0, jw1, jw2;
+  if (j_diagonal) {
+    jw0 = j_b(0, 0) * w[0];
+    jw1 = j_b(1, 1) * w[1];
+    jw2 = j_b(2, 2) * w[2];
+  } else {
+    jw0 = j_b(0, 0) * w[0] + j_b(0, 1) * w[1] + j_b(0, 2) * w[2];
+    jw1 = j_b(1, 0) * w[0] + j_b(1, 1) * w[1] + j_b(1, 2) * w[2];
+    jw2 = j_b(2, 0) * w[0] + j_b(2, 1) * w[1] + j_b(2, 2) * w[2];
+  }
+  return Vec3(w[1] * jw2 - w[2] * jw1, w[2] * jw0 - w[0] * jw2, w[0] * jw1 - w[1] * jw0);
 }
 
-// Lee et al. eqs. (10), (11), (16): E = R^T R_d, e_R = 1/2 vee(E^T - E), e_w = w - E w_d,
-// tau = -k_R e_R - k_w e_w + w x J w. kRateRef = false skips E w_d when w_d is identically zero
-// (the compiler may not drop x * 0 itself: that would change NaN/inf semantics).
+// Column i of R dotted with column j of R_d: entry (i, j) of E = R^T R_d.
+KESTREL_LEE_INLINE real col_dot(const Mat3& r, int i, const Mat3& d, int j) {
+  return r(0, i) * d(0, j) + r(1, i) * d(1, j) + r(2, i) * d(2, j);
+}
+
+// Lee et al. (2010) eqs. (10), (11), (16): E = R^T R_d, e_R = 1/2 vee(E^T - E), e_w = w - E w_d,
+// tau = -k_R e_R - k_w e_w + w x J w. Only what the law reads is formed:
+//  - e_R needs the six off-diagonal entries of E (each the dot product of a column of R with a
+//    column of R_d: 18 products instead of the 27 of the full product, no 3x3 temporary);
+//  - E w_d = R^T (R_d w_d) (two matrix-vector products, 18 products instead of 27 + 9), and
+//    kRateRef = false skips it when w_d is identically zero (the compiler may not drop x * 0
+//    itself: that would change NaN/inf semantics).
 template <bool kRateRef>
-inline Vec3 lee_torque(const LeeGains& g, const Mat3& j_b, const Mat3& r_wb, const Mat3& r_d, const Vec3& w_b,
-                       const Vec3& w_d) {
-  const Mat3 e = r_wb.transpose() * r_d;
-  const Vec3 e_r(0.5_r * (e(1, 2) - e(2, 1)), 0.5_r * (e(2, 0) - e(0, 2)), 0.5_r * (e(0, 1) - e(1, 0)));
-  Vec3 e_w = w_b;
-  if (kRateRef) e_w -= e * w_d;
-  return -g.k_rot.cwiseProduct(e_r) - g.k_angvel.cwiseProduct(e_w) + gyroscopic(j_b, w_b);
+KESTREL_LEE_INLINE Vec3 lee_torque(const LeeGains& g, const Mat3& j_b, bool j_diagonal, const Mat3& r_wb, const Mat3& r_d,
+                       const Vec3& w_b, const Vec3& w_d) {
+  const real e_r0 = 0.5_r * (col_dot(r_wb, 1, r_d, 2) - col_dot(r_wb, 2, r_d, 1));
+  const real e_r1 = 0.5_r * (col_dot(r_wb, 2, r_d, 0) - col_dot(r_wb, 0, r_d, 2));
+  const real e_r2 = 0.5_r * (col_dot(r_wb, 0, r_d, 1) - col_dot(r_wb, 1, r_d, 0));
+  real e_w0 = w_b[0], e_w1 = w_b[1], e_w2 = w_b[2];
+  if (kRateRef) {
+    // v = R_d w_d (world frame), then E w_d = R^T v.
+    const real v0 = r_d(0, 0) * w_d[0] + r_d(0, 1) * w_d[1] + r_d(0, 2) * w_d[2];
+    const real v1 = r_d(1, 0) * w_d[0] + r_d(1, 1) * w_d[1] + r_d(1, 2) * w_d[2];
+    const real v2 = r_d(2, 0) * w_d[0] + r_d(2, 1) * w_d[1] + r_d(2, 2) * w_d[2];
+    e_w0 -= r_wb(0, 0) * v0 + r_wb(1, 0) * v1 + r_wb(2, 0) * v2;
+    e_w1 -= r_wb(0, 1) * v0 + r_wb(1, 1) * v1 + r_wb(2, 1) * v2;
+    e_w2 -= r_wb(0, 2) * v0 + r_wb(1, 2) * v1 + r_wb(2, 2) * v2;
+  }
+  const Vec3 gy = gyroscopic(j_b, j_diagonal, w_b);
+  return Vec3(-(g.k_rot[0] * e_r0) - g.k_angvel[0] * e_w0 + gy[0], -(g.k_rot[1] * e_r1) - g.k_angvel[1] * e_w1 + gy[1],
+              -(g.k_rot[2] * e_r2) - g.k_angvel[2] * e_w2 + gy[2]);
+}
+
+// Quaternion (x, y, z, w) of a rotation matrix with w >= 0: Shepperd's method as Eigen's
+// Quaternion(Mat3) does it (the largest of trace / diagonal picks the pivot, one sqrt, one
+// division), written out so that it inlines into the controller instead of an out-of-line Eigen
+// call with its generic index arithmetic.
+KESTREL_LEE_INLINE Vec4 xyzw_of_rotation(const Mat3& m) {
+  real x, y, z, w;
+  const real tr = m(0, 0) + m(1, 1) + m(2, 2);
+  if (tr > 0) {
+    real t = std::sqrt(tr + 1);
+    w = 0.5_r * t;
+    t = 0.5_r / t;
+    x = (m(2, 1) - m(1, 2)) * t;
+    y = (m(0, 2) - m(2, 0)) * t;
+    z = (m(1, 0) - m(0, 1)) * t;
+  } else if (m(0, 0) >= m(1, 1) && m(0, 0) >= m(2, 2)) {  // pivot x (Eigen: i = 0 unless beaten)
+    real t = std::sqrt(m(0, 0) - m(1, 1) - m(2, 2) + 1);
+    x = 0.5_r * t;
+    t = 0.5_r / t;
+    w = (m(2, 1) - m(1, 2)) * t;
+    y = (m(1, 0) + m(0, 1)) * t;
+    z = (m(2, 0) + m(0, 2)) * t;
+  } else if (!(m(2, 2) > m(1, 1))) {  // pivot y
+    real t = std::sqrt(m(1, 1) - m(2, 2) - m(0, 0) + 1);
+    y = 0.5_r * t;
+    t = 0.5_r / t;
+    w = (m(0, 2) - m(2, 0)) * t;
+    z = (m(2, 1) + m(1, 2)) * t;
+    x = (m(0, 1) + m(1, 0)) * t;
+  } else {  // pivot z
+    real t = std::sqrt(m(2, 2) - m(0, 0) - m(1, 1) + 1);
+    z = 0.5_r * t;
+    t = 0.5_r / t;
+    w = (m(1, 0) - m(0, 1)) * t;
+    x = (m(0, 2) + m(2, 0)) * t;
+    y = (m(1, 2) + m(2, 1)) * t;
+  }
+  if (w < 0) return Vec4(-x, -y, -z, -w);
+  return Vec4(x, y, z, w);
 }
 
 inline Vec4 xyzw_nonneg_w(const Quat& q) {
@@ -146,22 +232,22 @@ inline Vec4 xyzw_nonneg_w(const Quat& q) {
 // a NaN survives the sum). Branch-free, ~3 instructions per value on a Cortex-M4F against ~7 for
 // an isfinite() test with a branch per value; these checks run on ~35 values every update.
 // Exact under the project's flags: without -ffast-math the compiler may not fold v * 0 to 0.
-inline real nonfinite_probe(const real* v, std::size_t n) {
+KESTREL_LEE_INLINE real nonfinite_probe(const real* v, std::size_t n) {
   real acc = 0;
   for (std::size_t i = 0; i < n; ++i) acc += v[i] * 0;
   return acc;
 }
-inline real nonfinite_probe(const Vec3& v) { return v[0] * 0 + v[1] * 0 + v[2] * 0; }
-inline real nonfinite_probe(const Vec4& v) { return v[0] * 0 + v[1] * 0 + v[2] * 0 + v[3] * 0; }
+KESTREL_LEE_INLINE real nonfinite_probe(const Vec3& v) { return v[0] * 0 + v[1] * 0 + v[2] * 0; }
+KESTREL_LEE_INLINE real nonfinite_probe(const Vec4& v) { return v[0] * 0 + v[1] * 0 + v[2] * 0 + v[3] * 0; }
 
-inline bool state_finite(const RigidBodyState& b) {
+KESTREL_LEE_INLINE bool state_finite(const RigidBodyState& b) {
   const Quat& q = b.orientation_wb;
   const real probe = nonfinite_probe(b.position_w) + nonfinite_probe(b.linvel_w) + nonfinite_probe(b.angvel_b) +
                      (q.x() * 0 + q.y() * 0 + q.z() * 0 + q.w() * 0);
   return probe == 0;
 }
 
-inline Wrench reject(LeeState& s, std::uint32_t faults) {
+KESTREL_LEE_INLINE Wrench reject(LeeState& s, std::uint32_t faults) {
   s.step_faults = faults;
   s.faults.raise(faults);
   return s.last_safe_wrench_b;
@@ -169,7 +255,7 @@ inline Wrench reject(LeeState& s, std::uint32_t faults) {
 
 // Validates the inputs and copies the clipped action into a[0..n). False: the update is rejected
 // (the held wrench is then in s.last_safe_wrench_b).
-inline bool accept(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action, std::size_t n,
+KESTREL_LEE_INLINE bool accept(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action, std::size_t n,
                    real* a, std::uint32_t& faults) {
   KESTREL_ASSERT(action != nullptr);
   faults = 0;
@@ -179,16 +265,16 @@ inline bool accept(const LeeParams& p, LeeState& s, const RigidBodyState& b, con
     reject(s, faults);
     return false;
   }
+  // In range (the usual case): two compares per component; clipping is the rare path.
+  const real lo = p.action_min, hi = p.action_max;
+  bool out_of_range = false;
   for (std::size_t i = 0; i < n; ++i) {
-    real v = action[i];
-    if (v < p.action_min) {
-      v = p.action_min;
-      faults |= kFaultCommandOutOfRange;
-    } else if (v > p.action_max) {
-      v = p.action_max;
-      faults |= kFaultCommandOutOfRange;
-    }
-    a[i] = v;
+    a[i] = action[i];
+    if (a[i] < lo || a[i] > hi) out_of_range = true;
+  }
+  if (out_of_range) {
+    faults = kFaultCommandOutOfRange;
+    for (std::size_t i = 0; i < n; ++i) a[i] = clamp(a[i], lo, hi);
   }
   return true;
 }
@@ -211,18 +297,53 @@ inline Wrench commit(LeeState& s, const Vec3& force_b, const Vec3& torque_b, con
   return s.last_safe_wrench_b;
 }
 
+// commit() for the thrust-only controllers: the force is (0, 0, fz), so the probe skips the two
+// constant zeros, and with kRateRef = false the desired rate is the constant zero (nothing to
+// probe). The stored intermediates are the same as commit() stores.
+//
+// The rejection is out of line and cold: it keeps its registers and loads off the update's path.
+__attribute__((noinline, cold)) Wrench reject_nonfinite_output(LeeState& s, const RigidBodyState* unchecked_state,
+                                                               std::uint32_t faults) {
+  if (unchecked_state != nullptr && !state_finite(*unchecked_state)) return reject(s, kFaultNonFiniteState);
+  return reject(s, faults | kFaultNonFiniteOutput);
+}
+
+// kStateChecked = false: the caller skipped the input check of the vehicle state because every
+// state component reaches a probed output (see update_lee_position); a failed probe then first
+// asks whether the state was at fault, so the flags are those the up-front check would raise.
+template <bool kRateRef, bool kStateChecked = true>
+KESTREL_LEE_INLINE Wrench commit_fz(LeeState& s, const RigidBodyState& b, real fz, const Vec3& torque_b,
+                                   const Vec3& accel_w, const Vec4& q_d, const Vec3& w_d, std::uint32_t faults) {
+  // accel_w needs no probe of its own: fz = m (a - g) . R e3 takes every component of it times a
+  // finite factor or a non-finite R (inf * x and NaN * x are non-finite, 0 * inf is NaN), so a
+  // non-finite a_i always makes fz non-finite.
+  real probe = fz * 0 + nonfinite_probe(torque_b) + nonfinite_probe(q_d);
+  if (kRateRef) probe += nonfinite_probe(w_d);
+  if (!(probe == 0)) return reject_nonfinite_output(s, kStateChecked ? nullptr : &b, faults);
+  s.last_safe_wrench_b.force_b = Vec3(0, 0, fz);
+  s.last_safe_wrench_b.torque_b = torque_b;
+  s.accel_command_w = accel_w;
+  s.desired_quat_xyzw = q_d;
+  s.desired_angvel_b = w_d;
+  s.step_faults = faults;
+  s.faults.raise(faults);
+  return s.last_safe_wrench_b;
+}
+
 // Shared tail of the position-type controllers: F = m (a - g), fz = F . body z, R_d from F and a
-// heading, torque with the given desired rate.
-template <bool kRateRef>
-inline Wrench finish_force_heading(const LeeParams& p, LeeState& s, const RigidBodyState& b, const AttitudeFrame& fr,
+// heading, torque with the given desired rate. Takes R only (the position controller needs no yaw
+// of the state, so it skips attitude_frame()'s sqrt).
+template <bool kRateRef, bool kStateChecked = true>
+KESTREL_LEE_INLINE Wrench finish_force_heading(const LeeParams& p, LeeState& s, const RigidBodyState& b, const Mat3& r_wb,
                                    const Vec3& accel_w, real cos_psi, real sin_psi, const Vec3& w_d,
                                    std::uint32_t faults) {
-  const Vec3 f_w = (accel_w - p.gravity_w) * p.mass_kg;
-  const real fz = f_w.dot(fr.r_wb.col(2));
+  const Vec3 f_w((accel_w[0] - p.gravity_w[0]) * p.mass_kg, (accel_w[1] - p.gravity_w[1]) * p.mass_kg,
+                 (accel_w[2] - p.gravity_w[2]) * p.mass_kg);
+  const real fz = f_w[0] * r_wb(0, 2) + f_w[1] * r_wb(1, 2) + f_w[2] * r_wb(2, 2);
   Mat3 r_d;
-  if (rotation_from_force_heading(f_w, cos_psi, sin_psi, fr.r_wb, r_d)) faults |= kFaultSingular;
-  const Vec3 tau = lee_torque<kRateRef>(s.gains, p.inertia_b, fr.r_wb, r_d, b.angvel_b, w_d);
-  return commit(s, Vec3(0, 0, fz), tau, accel_w, xyzw_nonneg_w(quat_from_rotation_matrix(r_d)), w_d, faults);
+  if (rotation_from_force_heading(f_w, cos_psi, sin_psi, r_wb, r_d)) faults |= kFaultSingular;
+  const Vec3 tau = lee_torque<kRateRef>(s.gains, p.inertia_b, s.inertia_diagonal, r_wb, r_d, b.angvel_b, w_d);
+  return commit_fz<kRateRef, kStateChecked>(s, b, fz, tau, accel_w, xyzw_of_rotation(r_d), w_d, faults);
 }
 
 // Velocity command rotated from the vehicle (yaw-only) frame into the world.
@@ -230,9 +351,8 @@ inline Vec3 vehicle_to_world(const AttitudeFrame& fr, real vx, real vy, real vz)
   return Vec3(fr.cos_yaw * vx - fr.sin_yaw * vy, fr.sin_yaw * vx + fr.cos_yaw * vy, vz);
 }
 
-}  // namespace
-
-AttitudeFrame attitude_frame(const Quat& q_wb) {
+// attitude_frame(), inlined into the controllers (the public function wraps it).
+KESTREL_LEE_INLINE AttitudeFrame frame_of(const Quat& q_wb) {
   AttitudeFrame f;
   f.r_wb = rotation_of(q_wb);
   // yaw = atan2(R10, R00) in the reference; its cosine and sine are the normalised pair.
@@ -245,6 +365,10 @@ AttitudeFrame attitude_frame(const Quat& q_wb) {
   }
   return f;
 }
+
+}  // namespace
+
+AttitudeFrame attitude_frame(const Quat& q_wb) { return frame_of(q_wb); }
 
 Status validate_lee_params(const LeeParams& p) {
   if (!is_finite(p.mass_kg) || !(p.mass_kg > 0)) return Status::invalid_argument;
@@ -344,6 +468,8 @@ LeeParams lee_params_rov() {
 void lee_reset(const LeeParams& params, LeeState& state) {
   state = LeeState();
   state.gains = lee_nominal_gains(params.gain_ranges);
+  const Mat3& j = params.inertia_b;
+  state.inertia_diagonal = j(0, 1) == 0 && j(0, 2) == 0 && j(1, 0) == 0 && j(1, 2) == 0 && j(2, 0) == 0 && j(2, 1) == 0;
 }
 
 void lee_reset(const LeeParams& params, LeeState& state, RngStream& rng) {
@@ -352,28 +478,53 @@ void lee_reset(const LeeParams& params, LeeState& state, RngStream& rng) {
 }
 
 Wrench update_lee_position(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
-  real a[kLeeActionDim];
+  // Input handling as accept(), with the state check checked once, at the end: every component of
+  // the state reaches a probed output (position and velocity -> accel_w -> fz, body rate ->
+  // torque through k_w e_w, every quaternion component -> fz = F . R e3, whose entries
+  // 2(xz + wy), 2(yz - wx), 1 - 2(xx + yy) hold all four; 0 * inf is NaN, so zero gains or zero
+  // force do not hide one), so a non-finite state always fails commit_fz's probe, which then names
+  // the state. The command is still checked first: clipping would turn +-inf into a finite value.
+  KESTREL_ASSERT(action != nullptr);
+  // Unrolled by hand (GCC -O2 keeps the loops, and the array then lives on the stack).
+  real a0 = action[0], a1 = action[1], a2 = action[2], a3 = action[3];
+  if (!(a0 * 0 + a1 * 0 + a2 * 0 + a3 * 0 == 0)) {
+    return reject(s, kFaultNonFiniteCommand | (state_finite(b) ? 0u : std::uint32_t{kFaultNonFiniteState}));
+  }
+  // In range (the usual case): two compares per component and nothing else; clipping is the rare
+  // path, with the same result as clamp() in accept().
   std::uint32_t faults = 0;
-  if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
-  const AttitudeFrame fr = attitude_frame(b.orientation_wb);
-  // a = K_pos (p_sp - p) + K_vel (0 - v)
-  const Vec3 accel_w =
-      s.gains.k_pos.cwiseProduct(Vec3(a[0], a[1], a[2]) - b.position_w) - s.gains.k_vel.cwiseProduct(b.linvel_w);
+  const real lo = p.action_min, hi = p.action_max;
+  if (a0 < lo || a0 > hi || a1 < lo || a1 > hi || a2 < lo || a2 > hi || a3 < lo || a3 > hi) {
+    faults = kFaultCommandOutOfRange;
+    a0 = clamp(a0, lo, hi);
+    a1 = clamp(a1, lo, hi);
+    a2 = clamp(a2, lo, hi);
+    a3 = clamp(a3, lo, hi);
+  }
+  // Only R is needed (the heading is commanded): no attitude_frame(), whose yaw costs a sqrt.
+  const Mat3 r_wb = rotation_of(b.orientation_wb);
+  // a = K_pos (p_sp - p) + K_vel (0 - v), per component (no Eigen expression temporaries).
+  const Vec3& kp = s.gains.k_pos;
+  const Vec3& kv = s.gains.k_vel;
+  const Vec3 accel_w(kp[0] * (a0 - b.position_w[0]) - kv[0] * b.linvel_w[0],
+                     kp[1] * (a1 - b.position_w[1]) - kv[1] * b.linvel_w[1],
+                     kp[2] * (a2 - b.position_w[2]) - kv[2] * b.linvel_w[2]);
   real c_psi, s_psi;
-  sin_cos(a[3], s_psi, c_psi);
-  return finish_force_heading<false>(p, s, b, fr, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
+  sin_cos(a3, s_psi, c_psi);
+  // w_d = 0 (Aerial Gym's position controller has no rate reference): lee_torque<false> skips E w_d.
+  return finish_force_heading<false, false>(p, s, b, r_wb, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
 }
 
 Wrench update_lee_velocity(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
   real a[kLeeActionDim];
   std::uint32_t faults = 0;
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
-  const AttitudeFrame fr = attitude_frame(b.orientation_wb);
+  const AttitudeFrame fr = frame_of(b.orientation_wb);
   // The position term K_pos (p - p) is exactly zero and left out.
   const Vec3 accel_w = s.gains.k_vel.cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
   const Vec3 w_d = clamp_body_yaw_rate(body_rate_of_yaw_rate(fr.r_wb, a[3]), p.max_yaw_rate_radps);
   // Heading = current yaw (quirk 5): yaw is steered by the rate term only.
-  return finish_force_heading<true>(p, s, b, fr, accel_w, fr.cos_yaw, fr.sin_yaw, w_d, faults);
+  return finish_force_heading<true>(p, s, b, fr.r_wb, accel_w, fr.cos_yaw, fr.sin_yaw, w_d, faults);
 }
 
 Wrench update_lee_velocity_steering_angle(const LeeParams& p, LeeState& s, const RigidBodyState& b,
@@ -381,18 +532,18 @@ Wrench update_lee_velocity_steering_angle(const LeeParams& p, LeeState& s, const
   real a[kLeeActionDim];
   std::uint32_t faults = 0;
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
-  const AttitudeFrame fr = attitude_frame(b.orientation_wb);
+  const AttitudeFrame fr = frame_of(b.orientation_wb);
   const Vec3 accel_w = s.gains.k_vel.cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
   real c_psi, s_psi;
   sin_cos(a[3], s_psi, c_psi);
-  return finish_force_heading<false>(p, s, b, fr, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
+  return finish_force_heading<false>(p, s, b, fr.r_wb, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
 }
 
 Wrench update_lee_acceleration(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
   real a[kLeeActionDim];
   std::uint32_t faults = 0;
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
-  const AttitudeFrame fr = attitude_frame(b.orientation_wb);
+  const AttitudeFrame fr = frame_of(b.orientation_wb);
   const Vec3 accel_w(a[0], a[1], a[2]);
   const Vec3 f_w = (accel_w - p.gravity_w) * p.mass_kg;
   const real fz = f_w.dot(fr.r_wb.col(2));
@@ -419,15 +570,15 @@ Wrench update_lee_acceleration(const LeeParams& p, LeeState& s, const RigidBodyS
   if (!(f_w.squaredNorm() > kMinForceSq)) faults |= kFaultSingular;  // zero thrust: attitude is moot
   const Mat3 r_d = rotation_zyx(fr.cos_yaw, fr.sin_yaw, cp, sp, cr, sr);
   const Vec3 w_d = clamp_body_yaw_rate(body_rate_of_yaw_rate(fr.r_wb, a[3]), p.max_yaw_rate_radps);
-  const Vec3 tau = lee_torque<true>(s.gains, p.inertia_b, fr.r_wb, r_d, b.angvel_b, w_d);
-  return commit(s, Vec3(0, 0, fz), tau, accel_w, xyzw_nonneg_w(quat_from_rotation_matrix(r_d)), w_d, faults);
+  const Vec3 tau = lee_torque<true>(s.gains, p.inertia_b, s.inertia_diagonal, fr.r_wb, r_d, b.angvel_b, w_d);
+  return commit(s, Vec3(0, 0, fz), tau, accel_w, xyzw_of_rotation(r_d), w_d, faults);
 }
 
 Wrench update_lee_attitude(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
   real a[kLeeActionDim];
   std::uint32_t faults = 0;
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
-  const AttitudeFrame fr = attitude_frame(b.orientation_wb);
+  const AttitudeFrame fr = frame_of(b.orientation_wb);
   // Not tilt-compensated (quirk 5): the command scales the hover thrust.
   const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.norm();
   real cp, sp, cr, sr;
@@ -435,8 +586,8 @@ Wrench update_lee_attitude(const LeeParams& p, LeeState& s, const RigidBodyState
   sin_cos(a[1], sr, cr);
   const Mat3 r_d = rotation_zyx(fr.cos_yaw, fr.sin_yaw, cp, sp, cr, sr);
   const Vec3 w_d = clamp_body_yaw_rate(body_rate_of_yaw_rate(fr.r_wb, a[3]), p.max_yaw_rate_radps);
-  const Vec3 tau = lee_torque<true>(s.gains, p.inertia_b, fr.r_wb, r_d, b.angvel_b, w_d);
-  return commit(s, Vec3(0, 0, fz), tau, Vec3::Zero(), xyzw_nonneg_w(quat_from_rotation_matrix(r_d)), w_d, faults);
+  const Vec3 tau = lee_torque<true>(s.gains, p.inertia_b, s.inertia_diagonal, fr.r_wb, r_d, b.angvel_b, w_d);
+  return commit(s, Vec3(0, 0, fz), tau, Vec3::Zero(), xyzw_of_rotation(r_d), w_d, faults);
 }
 
 Wrench update_lee_rates(const LeeParams& p, LeeState& s, const RigidBodyState& b, const real* action) {
@@ -452,7 +603,7 @@ Wrench update_lee_rates(const LeeParams& p, LeeState& s, const RigidBodyState& b
   // e_w = w - w_d. Quirk 2: it clamps the body-z rate in the caller's action buffer; we clamp a copy.
   const Vec3 w_d = clamp_body_yaw_rate(Vec3(a[1], a[2], a[3]), p.max_yaw_rate_radps);
   const Vec3& w = b.angvel_b;
-  const Vec3 tau = -s.gains.k_angvel.cwiseProduct(w - w_d) + gyroscopic(p.inertia_b, w);
+  const Vec3 tau = -s.gains.k_angvel.cwiseProduct(w - w_d) + gyroscopic(p.inertia_b, s.inertia_diagonal, w);
   return commit(s, Vec3(0, 0, fz), tau, Vec3::Zero(), xyzw_nonneg_w(b.orientation_wb), w_d, faults);
 }
 
@@ -477,8 +628,10 @@ Wrench update_rov_fully_actuated(const LeeParams& p, LeeState& s, const RigidBod
   const Vec3 f_w = (accel_w - p.gravity_w) * p.mass_kg;
   const Vec3 f_b = r_wb.transpose() * f_w;  // all three components: the ROV is fully actuated
   const Mat3 r_d = rotation_of(quat_from_xyzw(q_d));
-  const Vec3 tau = lee_torque<false>(s.gains, p.inertia_b, r_wb, r_d, b.angvel_b, Vec3::Zero());
+  const Vec3 tau = lee_torque<false>(s.gains, p.inertia_b, s.inertia_diagonal, r_wb, r_d, b.angvel_b, Vec3::Zero());
   return commit(s, f_b, tau, accel_w, q_d, Vec3::Zero(), faults);
 }
+
+#undef KESTREL_LEE_INLINE
 
 }  // namespace kestrel

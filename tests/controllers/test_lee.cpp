@@ -463,3 +463,60 @@ KTEST(LeeController, ClosedLoopVelocityAndAttitudeStayBounded) {
   KEXPECT_NEAR(body.linvel_w[1], 1, 0.02);
   KEXPECT_NEAR(body.linvel_w[2], 0.2, 0.02);
 }
+
+KTEST(LeeController, PositionFlagsEveryNonFiniteStateComponent) {
+  // update_lee_position checks the state through its output probe only (lee.cpp): every one of
+  // the 13 state values, as NaN, +inf or -inf, must still be named kFaultNonFiniteState and leave
+  // the state untouched, also with zero gains (0 * inf must not hide one).
+  const real bad_values[3] = {std::numeric_limits<real>::quiet_NaN(), std::numeric_limits<real>::infinity(),
+                              -std::numeric_limits<real>::infinity()};
+  for (int zero_gains = 0; zero_gains < 2; ++zero_gains) {
+    const LeeParams p = lee_params_base_quadrotor();
+    LeeState s;
+    lee_reset(p, s);
+    if (zero_gains != 0) s.gains = LeeGains();
+    RigidBodyState body;
+    body.orientation_wb = quat_from_euler_xyz(0.1_r, -0.2_r, 0.3_r);
+    const real a[4] = {0.5_r, -0.3_r, 1, 0.4_r};
+    const Wrench good = update_lee_position(p, s, body, a);
+    KEXPECT_EQ(s.step_faults, 0u);
+    const LeeState before = s;
+    for (int field = 0; field < 13; ++field) {
+      for (real v : bad_values) {
+        RigidBodyState bad = body;
+        if (field < 3) bad.position_w[field] = v;
+        else if (field < 6) bad.linvel_w[field - 3] = v;
+        else if (field < 9) bad.angvel_b[field - 6] = v;
+        else bad.orientation_wb.coeffs()[field - 9] = v;
+        const Wrench w = update_lee_position(p, s, bad, a);
+        KEXPECT_TRUE(same_wrench(w, good));
+        KEXPECT_EQ(s.step_faults, static_cast<std::uint32_t>(kFaultNonFiniteState));
+        KEXPECT_TRUE(state_finite(s));
+        KEXPECT_TRUE(s.accel_command_w == before.accel_command_w);
+        KEXPECT_TRUE(s.desired_quat_xyzw == before.desired_quat_xyzw);
+      }
+    }
+  }
+}
+
+KTEST(LeeController, DiagonalInertiaFastPathGivesTheSameBits) {
+  // lee_reset flags a diagonal inertia; the 3-product gyroscopic term must equal the full one.
+  const LeeParams p = lee_params_base_quadrotor();
+  LeeState fast, full;
+  lee_reset(p, fast);
+  lee_reset(p, full);
+  KEXPECT_TRUE(fast.inertia_diagonal);
+  full.inertia_diagonal = false;
+  RigidBodyState body;
+  body.orientation_wb = quat_from_euler_xyz(0.2_r, 0.1_r, -0.4_r);
+  body.angvel_b = Vec3(1.5_r, -2.0_r, 0.7_r);
+  const real a[4] = {0.2_r, 0.1_r, 1.5_r, 0.3_r};
+  const Wrench wf = update_lee_position(p, fast, body, a);
+  const Wrench wg = update_lee_position(p, full, body, a);
+  KEXPECT_TRUE(same_wrench(wf, wg));
+  LeeParams q = p;
+  q.inertia_b(0, 1) = q.inertia_b(1, 0) = 1e-5_r;
+  LeeState t;
+  lee_reset(q, t);
+  KEXPECT_FALSE(t.inertia_diagonal);
+}

@@ -97,6 +97,12 @@ struct LeeState {
   Vec4 desired_quat_xyzw = Vec4(0, 0, 0, 1);        // R_d as a quaternion (sign: w >= 0, except
                                                     // the ROV, which keeps the command's sign)
   Vec3 desired_angvel_b = Vec3::Zero();             // rad/s, after the body-z clamp
+  /// Set by lee_reset when params.inertia_b has zero off-diagonal entries (every preset, the
+  /// C API and the simulator build it as diag(...)): the gyroscopic term w x (J w) then needs 3
+  /// products instead of 9, with the same bits. False (the default) takes the general path, so a
+  /// state that never saw lee_reset is still correct. Call lee_reset again after changing
+  /// params.inertia_b (LeeParams are read-only after construction anyway).
+  bool inertia_diagonal = false;
 };
 
 /// Start an instance: nominal gains, zero outputs and intermediates, faults cleared.
