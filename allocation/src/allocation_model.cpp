@@ -33,12 +33,22 @@ Status build_allocation_model(const Airframe& airframe, const MotorHealth& healt
     m.thrust_max_N[i] = s * airframe.thrust_max_N[i];
   }
   if ((m.dead_mask | m.weak_mask) != 0) m.faults.raise(kFaultMotorFailure);
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < n; ++i) {
+      if (m.effectiveness(k, i) != 0) m.wrench_row_mask = static_cast<std::uint8_t>(m.wrench_row_mask | (1u << k));
+    }
+  }
   const Status st = pseudo_inverse(m.effectiveness, n, m.pinv, &m.pinv_info, options);
   if (st == Status::invalid_argument) return st;
   for (int k = 0; k < 6; ++k) {
     real mx = 0;
     for (int i = 0; i < n; ++i) mx = std::fabs(m.pinv(i, k)) > mx ? std::fabs(m.pinv(i, k)) : mx;
     m.pinv_col_abs_max[k] = mx;
+    const real d_min = 1e-6_r * mx;
+    for (int i = 0; i < n; ++i) {
+      if (std::fabs(m.pinv(i, k)) > d_min)
+        m.pinv_col_movable_mask[k] = static_cast<std::uint16_t>(m.pinv_col_movable_mask[k] | (1u << i));
+    }
   }
   if (m.pinv_info.rank < 6) m.faults.raise(kFaultSingular);
   if (!m.pinv_info.converged) m.faults.raise(kFaultNotConverged);

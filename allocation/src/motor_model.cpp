@@ -80,7 +80,8 @@ namespace {
 
 /// The per-motor loop of motor_model_step, with the rotor-speed choice fixed at compile time: RK4
 /// or explicit Euler on the thrust or on the rotor speed sqrt(f / c); gain and target fixed in
-/// the step.
+/// the step. (A quadrotor-unrolled copy was measured: more instructions on the Cortex-M4F, the
+/// unrolled body spills; so one rolled loop.)
 template <bool kRps>
 Status step_motors(const MotorModelConfig& cfg, MotorModelState& state, const real* reference_thrust_N, real dt_s) {
   const bool rk4 = cfg.integrator != MotorIntegrator::euler;
@@ -91,6 +92,7 @@ Status step_motors(const MotorModelConfig& cfg, MotorModelState& state, const re
   const bool discrete = cfg.use_discrete_approximation;
   const real thrust_min = cfg.thrust_min_N, thrust_max = cfg.thrust_max_N;
   const real max_rate = cfg.max_rate;
+  const real half_max_rate = 0.5_r * max_rate;
   const real ratio = cfg.thrust_to_torque_m;
   const real half_dt = 0.5_r * dt_s;
   const real dt_6 = dt_s / 6.0_r;
@@ -134,15 +136,27 @@ Status step_motors(const MotorModelConfig& cfg, MotorModelState& state, const re
       x = std::sqrt(f / c);
     }
     // The clamp is applied inside every RK4 stage (as the reference).
-    const real s1 = motor_rate(gain, target, x, max_rate);
+    const real s1_raw = gain * (target - x);
     real x_new;
-    if (rk4) {
+    if (rk4 && discrete && std::fabs(s1_raw) <= half_max_rate) {
+      // Unclamped fast path, bit-identical to the clamped stages below: with the discrete
+      // approximation dt k = dt / (dt + tau) < 1, so each later stage's error target - x_j is
+      // e (1 - c dt k) with 0 <= c dt k <= 1 (to round-off): |s_j| <= |s1| (1 + a few ulp), and
+      // with |s1| <= max_rate / 2 no clamp can bind (a clamp that does not bind returns its
+      // argument unchanged). Saves the 4 two-sided clamps (~28 Cortex-M4F instructions) per motor
+      // in the common case; NaN fails the test and takes the clamped path.
+      const real s2 = gain * (target - (x + half_dt * s1_raw));
+      const real s3 = gain * (target - (x + half_dt * s2));
+      const real s4 = gain * (target - (x + dt_s * s3));
+      x_new = x + dt_6 * (s1_raw + 2.0_r * s2 + 2.0_r * s3 + s4);
+    } else if (rk4) {
+      const real s1 = clamp(s1_raw, -max_rate, max_rate);
       const real s2 = motor_rate(gain, target, x + half_dt * s1, max_rate);
       const real s3 = motor_rate(gain, target, x + half_dt * s2, max_rate);
       const real s4 = motor_rate(gain, target, x + dt_s * s3, max_rate);
       x_new = x + dt_6 * (s1 + 2.0_r * s2 + 2.0_r * s3 + s4);
     } else {
-      x_new = x + dt_s * s1;
+      x_new = x + dt_s * clamp(s1_raw, -max_rate, max_rate);
     }
     real f_new = x_new;
     if constexpr (kRps) f_new = c * x_new * x_new;

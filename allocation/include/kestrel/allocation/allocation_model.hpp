@@ -35,10 +35,16 @@ struct AllocationModel {
   EffectivenessMatrix effectiveness = EffectivenessMatrix::Zero();  // A, dead columns zeroed
   PinvMatrix pinv = PinvMatrix::Zero();                             // A+ of `effectiveness`
   real pinv_col_abs_max[6] = {};       // largest |entry| of each A+ column (desaturation thresholds)
+  // Bit i of entry k: |A+(i, k)| > 1e-6 pinv_col_abs_max[k], i.e. motor i can be moved along
+  // wrench axis k (the desaturation test, precomputed so the hot path tests a bit).
+  std::uint16_t pinv_col_movable_mask[6] = {};
   real thrust_min_N[kMaxRotors] = {};  // health-scaled limits
   real thrust_max_N[kMaxRotors] = {};
   std::uint16_t dead_mask = 0;  // bit i: motor i is dead
   std::uint16_t weak_mask = 0;  // bit i: motor i is weak
+  // Bit k: row k of `effectiveness` has a non-zero entry. A zero row's part of A f is exactly +0
+  // for finite thrusts (e.g. fx, fy of a quadrotor), so the allocators skip it.
+  std::uint8_t wrench_row_mask = 0;
   PinvInfo pinv_info;           // rank, sweeps, singular values
   FaultFlags faults;            // kFaultSingular (rank < 6), kFaultMotorFailure, kFaultNotConverged
 };

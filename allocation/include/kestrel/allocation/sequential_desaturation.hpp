@@ -10,7 +10,7 @@
 // normalisation of A+ is needed; limits are per motor and may be health-scaled.
 //
 // First, f = A+ w: if every motor is within its limits the command is feasible and returned as
-// is (the common case; about 570 Cortex-M4F instructions for a quadrotor, result included).
+// is (the common case; about 330 Cortex-M4F instructions for a quadrotor, result included).
 // PX4 always runs the sequence below, which differs only when adding yaw brings an otherwise
 // out-of-range motor back in range; Kestrel keeps the exact answer there.
 // Otherwise, priorities (airmode = roll_pitch, the default):
