@@ -99,6 +99,8 @@ Status fly(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock, WaitF
   return Status::ok;
 }
 
+bool flight_pass(const FlightReport& r) { return r.finite && r.takeoff_time_s > 0 && r.final_error_m < 0.05_r; }
+
 void print_report(const FlightConfig& c, const FlightReport& r, const char* target, const char* cost_unit,
                   double cost_scale) {
   using namespace kestrel::platform;

@@ -89,6 +89,9 @@ using WaitFn = void (*)();
 [[nodiscard]] Status fly(const FlightConfig& config, FlightStack& stack, Plant& plant, ClockFn clock, WaitFn wait,
                          FlightReport& report);
 
+/// The example's pass criterion: finite throughout, took off, final error under 5 cm.
+bool flight_pass(const FlightReport& report);
+
 /// Prints the report; `cost_unit` names the clock unit and `cost_scale` converts clock units to it.
 void print_report(const FlightConfig& config, const FlightReport& report, const char* target, const char* cost_unit,
                   double cost_scale);

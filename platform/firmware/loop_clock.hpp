@@ -7,7 +7,10 @@
 #include <cstdint>
 
 #if defined(KESTREL_PLATFORM_CORTEX_M)
+#include <cstddef>
+
 #include "kestrel/platform/board.hpp"
+#include "kestrel/platform/console.hpp"
 
 namespace kestrel::firmware::loop_clock {
 namespace detail {
@@ -31,6 +34,27 @@ inline void wait_for_tick() {
 }
 
 inline std::uint64_t now_ticks() { return kestrel::platform::board::systick_now(); }
+
+/// "<cpu>, QEMU <board>, -icount shift=0" into out, without snprintf (newlib's pulls in malloc).
+template <std::size_t N>
+void describe_target(char (&out)[N]) {
+  namespace board = kestrel::platform::board;
+  const char* parts[] = {board::kCpuName, ", QEMU ", board::kBoardName, ", -icount shift=0"};
+  std::size_t n = 0;
+  for (const char* p : parts)
+    for (; *p != '\0' && n + 1 < N; ++p) out[n++] = *p;
+  out[n] = '\0';
+}
+
+/// Prints the painted-stack high-water mark.
+inline void print_stack_use() {
+  namespace board = kestrel::platform::board;
+  kestrel::platform::print("  stack used: ");
+  kestrel::platform::print_uint(board::stack_used_bytes());
+  kestrel::platform::print(" of ");
+  kestrel::platform::print_uint(board::stack_size_bytes());
+  kestrel::platform::println(" bytes");
+}
 }  // namespace kestrel::firmware::loop_clock
 
 #else

@@ -30,21 +30,10 @@ int main() {
     return 1;
   }
   board::systick_stop();
-  char target[96] = "QEMU ";
-  {
-    // "<cpu>, QEMU <board>, -icount shift=0" without snprintf (newlib's pulls in malloc).
-    const char* parts[] = {board::kCpuName, ", QEMU ", board::kBoardName, ", -icount shift=0"};
-    std::size_t n = 0;
-    for (const char* p : parts)
-      for (; *p != '\0' && n + 1 < sizeof(target); ++p) target[n++] = *p;
-    target[n] = '\0';
-  }
+  char target[96];
+  kestrel::firmware::loop_clock::describe_target(target);
   hexa_print_report(config, report, target, "instructions", static_cast<double>(board::kIcountInstructionsPerTick));
-  kestrel::platform::print("  stack used: ");
-  kestrel::platform::print_uint(board::stack_used_bytes());
-  kestrel::platform::print(" of ");
-  kestrel::platform::print_uint(board::stack_size_bytes());
-  kestrel::platform::println(" bytes");
+  kestrel::firmware::loop_clock::print_stack_use();
   const bool ok = hexa_pass(config, report);
   kestrel::platform::println(ok ? "hexarotor firmware example: PASS" : "hexarotor firmware example: FAIL");
   return ok ? 0 : 1;

@@ -30,7 +30,7 @@ int main() {
   kestrel::platform::print("  back-to-back control step: ");
   kestrel::platform::print_fixed(static_cast<double>(best) / n, 1);
   kestrel::platform::println(" ns (best of 5 x 100000)");
-  const bool ok = report.finite && report.takeoff_time_s > 0 && report.final_error_m < 0.05f;
+  const bool ok = flight_pass(report);
   kestrel::platform::println(ok ? "firmware example: PASS" : "firmware example: FAIL");
   return ok ? 0 : 1;
 }

@@ -30,15 +30,8 @@ int main() {
     return 1;
   }
   board::systick_stop();
-  char target[96] = "QEMU ";
-  {
-    // "<cpu>, QEMU <board>, -icount shift=0" without snprintf (newlib's pulls in malloc).
-    const char* parts[] = {board::kCpuName, ", QEMU ", board::kBoardName, ", -icount shift=0"};
-    std::size_t n = 0;
-    for (const char* p : parts)
-      for (; *p != '\0' && n + 1 < sizeof(target); ++p) target[n++] = *p;
-    target[n] = '\0';
-  }
+  char target[96];
+  kestrel::firmware::loop_clock::describe_target(target);
   print_report(config, report, target, "instructions",
                static_cast<double>(board::kIcountInstructionsPerTick));
   // Steady-state cost without the loop: 1000 back-to-back steps.
@@ -48,12 +41,8 @@ int main() {
   kestrel::platform::print("  back-to-back control step: ");
   kestrel::platform::print_fixed(static_cast<double>(board::ticks_to_instructions(ticks)) / 1000.0, 1);
   kestrel::platform::println(" instructions (1000 steps)");
-  kestrel::platform::print("  stack used: ");
-  kestrel::platform::print_uint(board::stack_used_bytes());
-  kestrel::platform::print(" of ");
-  kestrel::platform::print_uint(board::stack_size_bytes());
-  kestrel::platform::println(" bytes");
-  const bool ok = report.finite && report.takeoff_time_s > 0 && report.final_error_m < 0.05f;
+  kestrel::firmware::loop_clock::print_stack_use();
+  const bool ok = flight_pass(report);
   kestrel::platform::println(ok ? "firmware example: PASS" : "firmware example: FAIL");
   return ok ? 0 : 1;
 }
