@@ -65,4 +65,5 @@ install(FILES
   "${PROJECT_SOURCE_DIR}/cmake/toolchain-cortex-m3.cmake"
   "${PROJECT_SOURCE_DIR}/cmake/toolchain-cortex-m4f.cmake"
   "${PROJECT_SOURCE_DIR}/cmake/toolchain-cortex-m7.cmake"
+  "${PROJECT_SOURCE_DIR}/cmake/toolchain-stm32f405.cmake"
   DESTINATION ${KESTREL_INSTALL_TOOLCHAINDIR})

@@ -1,8 +1,10 @@
-# Cortex-M images for the Arm MPS2 boards (QEMU): firmware executables and ktest images.
+# Cortex-M images for the Arm MPS2 boards and the STM32F405 (netduinoplus2) under QEMU: firmware
+# executables and ktest images.
 # Included by platform/cortex-m/CMakeLists.txt in MCU builds (KESTREL_BOARD != host).
 #
 #   kestrel_add_mcu_executable(<name> SOURCES <src>... [LIBS <lib>...] [STACK_SIZE <bytes>]
-#                              [EXCLUDE_FROM_ALL] [NO_IMAGE_CHECK] [RUN] [TIMEOUT <s>])
+#                              [EXCLUDE_FROM_ALL] [NO_IMAGE_CHECK] [RUN] [TIMEOUT <s>]
+#                              [LINKER_SCRIPT <file>])
 #     <name>.elf for KESTREL_BOARD: startup code, vector table, fault handlers, semihosting
 #     console (kestrel::platform), linker script ld/<board>.ld, no heap. Also <name>.elf.map.
 #     Registers the ctest <name>.image (check-image.sh: no heap symbols, flash/RAM use) unless
@@ -11,7 +13,8 @@
 #
 #   kestrel_add_mcu_test(<name> SOURCES <src>... [LIBS <lib>...] [STACK_SIZE <bytes>] [TIMEOUT <s>])
 #     The same plus the ktest runner (tests/support/ktest_runner.cpp) and semihosting file access
-#     (tests/support/test_io_semihost.cpp), include dirs tests/support and tests/, and the ctest
+#     (tests/support/test_io_semihost.cpp), linked with ld/<board>-tests.ld where the board has
+#     one, include dirs tests/support and tests/, and the ctest
 #     <name>: run-qemu.sh runs the image with the golden directory ($KESTREL_GOLDEN_DIR at test
 #     time, else KESTREL_GOLDEN_DIR_DEFAULT) as a semihosting argument and passes if QEMU exits 0
 #     and prints "<N> passed, 0 failed".
@@ -33,13 +36,13 @@ get_filename_component(_dir "${CMAKE_CURRENT_LIST_DIR}/../tests" ABSOLUTE)
 set(KESTREL_TESTS_DIR "${_dir}" CACHE INTERNAL "")
 set(KESTREL_TEST_SUPPORT_DIR "${_dir}/support" CACHE INTERNAL "")
 
-set(_boards mps2-an385 mps2-an386 mps2-an500)
+set(_boards mps2-an385 mps2-an386 mps2-an500 netduinoplus2)
 if(NOT KESTREL_BOARD IN_LIST _boards)
   message(FATAL_ERROR "KESTREL_BOARD=${KESTREL_BOARD}: the Cortex-M port supports ${_boards}")
 endif()
 if(NOT CMAKE_SYSTEM_NAME STREQUAL "Generic" OR NOT CMAKE_SYSTEM_PROCESSOR STREQUAL "arm")
   message(FATAL_ERROR "KESTREL_BOARD=${KESTREL_BOARD} needs the arm-none-eabi toolchain: configure with "
-                      "--preset cortex-m4f|cortex-m7|cortex-m3 or -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-<cpu>.cmake")
+                      "--preset cortex-m4f|cortex-m7|cortex-m3|netduinoplus2 or -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-<cpu>.cmake")
 endif()
 
 if(DEFINED KESTREL_QEMU_MACHINE AND NOT KESTREL_QEMU_MACHINE STREQUAL KESTREL_BOARD)
@@ -48,6 +51,13 @@ if(DEFINED KESTREL_QEMU_MACHINE AND NOT KESTREL_QEMU_MACHINE STREQUAL KESTREL_BO
 endif()
 
 set(KESTREL_MCU_LINKER_SCRIPT "${KESTREL_CORTEX_M_DIR}/ld/${KESTREL_BOARD}.ld" CACHE INTERNAL "")
+# A board whose real RAM is smaller than what QEMU maps may give the ktest images their own script
+# (netduinoplus2: 128 KiB on the chip, 192 KiB in QEMU; see ld/netduinoplus2-tests.ld).
+if(EXISTS "${KESTREL_CORTEX_M_DIR}/ld/${KESTREL_BOARD}-tests.ld")
+  set(KESTREL_MCU_TEST_LINKER_SCRIPT "${KESTREL_CORTEX_M_DIR}/ld/${KESTREL_BOARD}-tests.ld" CACHE INTERNAL "")
+else()
+  set(KESTREL_MCU_TEST_LINKER_SCRIPT "${KESTREL_MCU_LINKER_SCRIPT}" CACHE INTERNAL "")
+endif()
 set(KESTREL_MCU_QEMU_MACHINE "${KESTREL_BOARD}" CACHE INTERNAL "")  # QEMU's machine names are the board names
 
 file(STRINGS "${KESTREL_CORTEX_M_DIR}/heap-symbols.txt" _lines)
@@ -88,9 +98,12 @@ function(kestrel_add_qemu_test test image argv0 timeout)
 endfunction()
 
 function(kestrel_add_mcu_executable name)
-  cmake_parse_arguments(PARSE_ARGV 1 arg "EXCLUDE_FROM_ALL;NO_IMAGE_CHECK;RUN" "STACK_SIZE;TIMEOUT" "SOURCES;LIBS")
+  cmake_parse_arguments(PARSE_ARGV 1 arg "EXCLUDE_FROM_ALL;NO_IMAGE_CHECK;RUN" "STACK_SIZE;TIMEOUT;LINKER_SCRIPT" "SOURCES;LIBS")
   if(arg_UNPARSED_ARGUMENTS)
     message(FATAL_ERROR "kestrel_add_mcu_executable(${name}): unknown arguments ${arg_UNPARSED_ARGUMENTS}")
+  endif()
+  if(NOT arg_LINKER_SCRIPT)
+    set(arg_LINKER_SCRIPT "${KESTREL_MCU_LINKER_SCRIPT}")
   endif()
   set(exclude "")
   if(arg_EXCLUDE_FROM_ALL)
@@ -103,14 +116,14 @@ function(kestrel_add_mcu_executable name)
   target_link_libraries(${name} PRIVATE ${arg_LIBS} kestrel_platform kestrel_cortex_m_runtime)
   target_link_options(${name} PRIVATE
     -nostartfiles
-    "-L${KESTREL_CORTEX_M_DIR}/ld" "-T${KESTREL_MCU_LINKER_SCRIPT}"
+    "-L${KESTREL_CORTEX_M_DIR}/ld" "-T${arg_LINKER_SCRIPT}"
     "-Wl,-Map=$<TARGET_FILE:${name}>.map"
     ${KESTREL_MCU_NO_HEAP_LINK_OPTIONS})
   if(arg_STACK_SIZE)
     target_link_options(${name} PRIVATE "-Wl,--defsym=__stack_size=${arg_STACK_SIZE}")
   endif()
   set_property(TARGET ${name} APPEND PROPERTY LINK_DEPENDS
-    "${KESTREL_MCU_LINKER_SCRIPT}" "${KESTREL_CORTEX_M_DIR}/ld/cortex-m-sections.ld"
+    "${arg_LINKER_SCRIPT}" "${KESTREL_CORTEX_M_DIR}/ld/cortex-m-sections.ld"
     "${KESTREL_CORTEX_M_DIR}/heap-symbols.txt")
 
   if(NOT arg_NO_IMAGE_CHECK AND NOT arg_EXCLUDE_FROM_ALL)
@@ -139,7 +152,7 @@ function(kestrel_add_mcu_test name)
   if(NOT arg_TIMEOUT)
     set(arg_TIMEOUT ${KESTREL_MCU_TEST_TIMEOUT})
   endif()
-  kestrel_add_mcu_executable(${name} ${stack}
+  kestrel_add_mcu_executable(${name} ${stack} LINKER_SCRIPT "${KESTREL_MCU_TEST_LINKER_SCRIPT}"
     SOURCES ${arg_SOURCES} "${KESTREL_TEST_SUPPORT_DIR}/ktest_runner.cpp" "${KESTREL_TEST_SUPPORT_DIR}/test_io_semihost.cpp"
     LIBS ${arg_LIBS})
   # Without KESTREL_TEST_GTEST, ktest.hpp selects its own runner's macros.

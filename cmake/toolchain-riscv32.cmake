@@ -1,9 +1,10 @@
 # RV32IMAC (ilp32, soft float) bare metal with riscv64-unknown-elf-gcc and picolibc. Compiles the
 # core libraries only (cmake/riscv32-core is the project that uses it; the Cortex-M board ports,
 # firmware images and QEMU runs do not exist for RISC-V yet).
-# Status: configures, but does not compile on this machine: the Debian riscv64-unknown-elf-gcc +
-# picolibc packages ship no libstdc++ headers (<cstdint> is missing); a riscv toolchain with its
-# C++ library (e.g. a picolibc-built libstdc++) is needed.
+# Status: configures, but does not compile with Debian 12's packages: riscv64-unknown-elf-gcc +
+# picolibc ship no libstdc++ headers (<cstdint> is missing) and Debian has no bare-metal RISC-V
+# libstdc++; the evidence (package file lists, include search path) is in riscv32-core/README.md.
+# A riscv toolchain with its C++ library (e.g. a picolibc-built libstdc++) is needed.
 # Usage: cmake -S cmake/riscv32-core -B build/riscv32 -DCMAKE_TOOLCHAIN_FILE=cmake/toolchain-riscv32.cmake
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR riscv32)

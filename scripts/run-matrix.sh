@@ -25,18 +25,18 @@ run() {  # name, configure args...
     summary=$(grep -E "tests passed|tests failed" "$log" | tail -1)
     status="$status ($summary)"
   fi
-  results="$results$(printf '%-14s %s  [log: %s]' "$name" "$status" "$log")
+  results="$results$(printf '%-15s %s  [log: %s]' "$name" "$status" "$log")
 "
 }
 
 run cortex-m3  "$root" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-cortex-m3.cmake"
 run cortex-m4f "$root" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-cortex-m4f.cmake"
 run cortex-m7  "$root" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-cortex-m7.cmake"
-# cortex-m4f-stm32f405 (QEMU netduinoplus2): not implemented yet.
+run netduinoplus2 "$root" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-stm32f405.cmake"
 run riscv32    "$root/cmake/riscv32-core" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-riscv32.cmake"
 run host-double "$root" -DCMAKE_BUILD_TYPE=Release -DKESTREL_DOUBLE=ON -DKESTREL_MCU_TESTS=OFF
 
-printf '\n%-14s %s\n' target result
+printf '\n%-15s %s\n' target result
 printf '%s' "$results"
 case "$results" in *FAILED*) exit 1 ;; esac
 exit 0

@@ -15,10 +15,12 @@ constexpr bool directions_ok(const AirframeSpec& s) {
 }
 
 static_assert(directions_ok(kBaseQuadrotor) && kBaseQuadrotor.num_rotors == 4, "base_quadrotor preset");
-static_assert(directions_ok(kBaseRandom) && kBaseRandom.num_rotors == 8, "base_random preset");
-static_assert(directions_ok(kBaseOctarotor) && kBaseOctarotor.num_rotors == 8, "base_octarotor preset");
-static_assert(directions_ok(kBaseRov) && kBaseRov.num_rotors == 8, "base_rov preset");
-static_assert(directions_ok(kHexarotor) && kHexarotor.num_rotors == 6, "hexarotor preset");
+// With a reduced KESTREL_MAX_ROTORS (airframe.hpp) the larger presets are empty.
+static_assert(kMaxRotors < 8 || (directions_ok(kBaseRandom) && kBaseRandom.num_rotors == 8), "base_random preset");
+static_assert(kMaxRotors < 8 || (directions_ok(kBaseOctarotor) && kBaseOctarotor.num_rotors == 8), "base_octarotor preset");
+static_assert(kMaxRotors < 8 || (directions_ok(kBaseRov) && kBaseRov.num_rotors == 8), "base_rov preset");
+static_assert(kMaxRotors < 6 || (directions_ok(kHexarotor) && kHexarotor.num_rotors == 6), "hexarotor preset");
+static_assert(kMaxRotors >= 6 || (kHexarotor.num_rotors == 0 && kBaseRov.num_rotors == 0), "presets beyond the capacity are empty");
 static_assert(directions_ok(kX500) && kX500.num_rotors == 4, "x500 preset");
 static_assert(airframe_spec(AirframePreset::x500).num_rotors == 4, "preset lookup");
 static_assert(motor_model_preset(AirframePreset::base_quadrotor).use_rps, "quad motors use the rotor-speed state");

@@ -6,6 +6,10 @@
 //  - the same quadrotor stepped in MuJoCo (free body, the same Kestrel controller + allocation +
 //    motor model computing the wrench each step, applied through xfrc_applied), one core.
 //
+// World::step takes the batched twin of the robot step (sim/batch_step.hpp) where the config allows
+// it; the empty_scalar_path rows time the same worlds with World::set_batched(false) (same bits),
+// and the per-stage split is printed for both the scalar core functions and the batched twin.
+//
 // Method: each figure is the median of several repetitions (std::chrono::steady_clock around
 // World::step(k), k chosen so a repetition is a few million env-steps), after one untimed warm-up
 // repetition. Timings are printed and optionally written as CSV; nothing is asserted (the smoke
@@ -24,6 +28,7 @@
 
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/batch_step.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/world.hpp"
 
@@ -95,14 +100,16 @@ WorldConfig make_config(const char* env, int envs, int threads) {
   return c;  // base_sim, base_quadrotor, lee_position_control, position_setpoint (the defaults)
 }
 
-/// Median env-steps/s of World::step over `reps` repetitions.
-double time_world(const Options& o, const char* env, int envs, int threads) {
+/// Median env-steps/s of World::step over `reps` repetitions. batched = false forces the scalar
+/// robot step (World::set_batched; same bits, for the before/after comparison).
+double time_world(const Options& o, const char* env, int envs, int threads, bool batched = true) {
   std::string err;
   std::unique_ptr<World> w = World::create(make_config(env, envs, threads), err);
   if (!w) {
     std::fprintf(stderr, "World::create: %s\n", err.c_str());
     std::exit(1);
   }
+  w->set_batched(batched);
   const int k = std::max(1, static_cast<int>(o.env_steps_per_rep / envs));
   w->step(std::max(1, k / 4));  // warm-up: caches, page faults, branch predictors
   std::vector<double> rates;
@@ -205,7 +212,8 @@ void bench_split(const Options& o) {
   });
   const double ns_dyn = stage([&](int i) { (void)step_rigid_body(s.body, r.state[i], r.wrench[i], dt); });
   const double total = ns_ctrl + ns_alloc + ns_motor + ns_dyn;
-  std::printf("\nSplit of the per-robot physics step (4096 robots, 1 thread, ns per env-step; stages timed one at a time):\n");
+  std::printf("\nSplit of the per-robot physics step (4096 robots, 1 thread, ns per env-step; stages timed one at a time;\n"
+              "scalar core functions, as the firmware and World::robot_dynamics call them):\n");
   std::printf("  controller (lee_position)          %7.1f ns  (%4.1f%%)\n", ns_ctrl, 100 * ns_ctrl / total);
   std::printf("  allocation (sequential desat.)     %7.1f ns  (%4.1f%%)\n", ns_alloc, 100 * ns_alloc / total);
   std::printf("  motor model (RK4) + wrench A f      %7.1f ns  (%4.1f%%)\n", ns_motor, 100 * ns_motor / total);
@@ -215,6 +223,81 @@ void bench_split(const Options& o) {
   record("split_allocation", n, 1, 1e9 / ns_alloc, "ns/env-step of the stage alone");
   record("split_motor_model", n, 1, 1e9 / ns_motor, "ns/env-step of the stage alone");
   record("split_rigid_body", n, 1, 1e9 / ns_dyn, "ns/env-step of the stage alone");
+
+  // The same stages through the batched twin (sim/batch_step.hpp: kLanes robots per call, the path
+  // World::step takes for this robot), on fresh robots so both splits start from the same states.
+  Robots b = make_robots(s, n);
+  batch::Models m;
+  m.controller = ControllerKind::lee_position;
+  m.ctrl = &s.ctrl;
+  m.alloc = &s.alloc;
+  m.desat = &s.desat;
+  m.motor = &s.motor_cfg;
+  m.airframe = &s.airframe;
+  m.body = &s.body;
+  m.dt_s = dt;
+  m.substeps = 1;
+  if (!batch::eligible(m)) {
+    std::printf("  (batched twin not eligible for this build: skipped)\n");
+    return;
+  }
+  constexpr int kL = batch::kLanes;
+  const int groups = n / kL;
+  std::vector<Vec3> zero3(static_cast<std::size_t>(n), Vec3::Zero());
+  struct Group {
+    batch::Lane l[kL];
+  };
+  std::vector<Group> lanes(static_cast<std::size_t>(groups));
+  for (int g = 0; g < groups; ++g)
+    for (int l = 0; l < kL; ++l) {
+      const int i = g * kL + l;
+      batch::Lane& ln = lanes[static_cast<std::size_t>(g)].l[l];
+      ln.state = &b.state[i];
+      ln.ctrl = &b.ctrl[i];
+      ln.alloc = &b.alloc[i];
+      ln.motors = &b.motors[i];
+      ln.action = &b.action[i * kMaxActionDim];
+      ln.contact_force_w = &zero3[i];
+      ln.contact_torque_b = &zero3[i];
+    }
+  struct GroupIo {
+    real wrench[6][kL];
+    real thrust[4][kL];
+    real body[6][kL];
+  };
+  std::vector<GroupIo> io(static_cast<std::size_t>(groups));
+  auto lane_ref = [&](int g) -> const batch::Lane(&)[kL] { return lanes[static_cast<std::size_t>(g)].l; };
+  auto bstage = [&](auto&& body) {
+    std::vector<double> ns;
+    for (int rep = 0; rep < o.reps; ++rep) {
+      const auto t0 = Clock::now();
+      for (int j = 0; j < k; ++j)
+        for (int g = 0; g < groups; ++g) body(g);
+      ns.push_back(seconds_since(t0) * 1e9 / (static_cast<double>(k) * groups * kL));
+    }
+    return median(ns);
+  };
+  const double b_ctrl = bstage([&](int g) { batch::controller_stage(m, lane_ref(g), io[static_cast<std::size_t>(g)].wrench); });
+  const double b_alloc = bstage([&](int g) {
+    GroupIo& x = io[static_cast<std::size_t>(g)];
+    batch::allocation_stage(m, lane_ref(g), x.wrench, x.thrust);
+  });
+  const double b_motor = bstage([&](int g) {
+    GroupIo& x = io[static_cast<std::size_t>(g)];
+    batch::motor_stage(m, lane_ref(g), x.thrust, x.body);
+  });
+  const double b_dyn = bstage([&](int g) { batch::rigid_body_stage(m, lane_ref(g), io[static_cast<std::size_t>(g)].body); });
+  const double b_total = b_ctrl + b_alloc + b_motor + b_dyn;
+  std::printf("\nThe same stages through the batched twin (%d robots per call, the path World::step takes):\n", kL);
+  std::printf("  controller (lee_position)          %7.1f ns  (%4.1f%%)\n", b_ctrl, 100 * b_ctrl / b_total);
+  std::printf("  allocation (sequential desat.)     %7.1f ns  (%4.1f%%)\n", b_alloc, 100 * b_alloc / b_total);
+  std::printf("  motor model (RK4) + wrench A f      %7.1f ns  (%4.1f%%)\n", b_motor, 100 * b_motor / b_total);
+  std::printf("  rigid body (semi-implicit Euler)   %7.1f ns  (%4.1f%%)\n", b_dyn, 100 * b_dyn / b_total);
+  std::printf("  sum                                %7.1f ns  (%.3g env-steps/s per core)\n", b_total, 1e9 / b_total);
+  record("split_batched_controller", n, 1, 1e9 / b_ctrl, "batched twin; ns/env-step of the stage alone");
+  record("split_batched_allocation", n, 1, 1e9 / b_alloc, "batched twin; ns/env-step of the stage alone");
+  record("split_batched_motor_model", n, 1, 1e9 / b_motor, "batched twin; ns/env-step of the stage alone");
+  record("split_batched_rigid_body", n, 1, 1e9 / b_dyn, "batched twin; ns/env-step of the stage alone");
 }
 
 #ifdef KESTREL_BENCH_MUJOCO
@@ -371,6 +454,14 @@ int main(int argc, char** argv) {
     std::printf("  %8d %14.4g %14.4g %12.1f %12.1f\n", sizes[i], r1[i], r2[i], 1e9 / r1[i], 1e9 / r2[i]);
   }
   std::printf("  (1 env: one pool thread whatever the count asked for)\n");
+  {
+    // Before/after: the same worlds with the scalar robot step (World::set_batched(false)).
+    const double s1 = time_world(o, "empty", big, 1, false), s2 = time_world(o, "empty", big, 2, false);
+    record("empty_scalar_path", big, 1, s1, "World::set_batched(false)");
+    record("empty_scalar_path", big, 2, s2, "World::set_batched(false)");
+    std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- scalar robot step (set_batched(false)), for comparison\n", big, s1,
+                s2, 1e9 / s1, 1e9 / s2);
+  }
   const double one_env_us = 1e6 / r1[0];
   std::size_t i_big = 0;
   for (std::size_t i = 0; i < sizes.size(); ++i)

@@ -5,7 +5,8 @@
 #               [--expect-status <n>] [--expect-output <extended regex>]
 # The golden directory passed to the image (second semihosting argument) is $KESTREL_GOLDEN_DIR
 # if set and non-empty, else --golden-default. -icount shift=0 makes timing deterministic: each
-# instruction advances virtual time by 1 ns (SysTick at 25 MHz: one tick per 40 instructions).
+# instruction advances virtual time by 1 ns (SysTick at 25 MHz on the MPS2 boards: one tick per 40
+# instructions; at 168 MHz on the netduinoplus2: 21 ticks per 125 instructions).
 # sleep=off: while the core idles (WFI) virtual time jumps to the next timer deadline instead of
 # following the host's clock, so a loop paced by SysTick runs as fast as QEMU can go and its
 # measurements repeat bit for bit (with the default sleep=on the firmware example took 12.5 s of

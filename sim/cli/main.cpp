@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <cmath>
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +18,7 @@
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
+#include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
 #include "kestrel/sim/world.hpp"
 
@@ -28,6 +30,7 @@ namespace {
 int usage() {
   std::fprintf(stderr,
                "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
+               "                   [--task ID] [--policy scripted|zero]\n"
                "       kestrel list\n");
   return 2;
 }
@@ -45,10 +48,12 @@ bool parse_long(const char* s, long long lo, long long& out) {
   return end != s && *end == '\0' && out >= lo;
 }
 
-// An RL task (sim/task.hpp) runs through its step() with a scripted policy that commands the
-// target (action = the observed position error, i.e. the offset of the target from the robot for
-// lee_position_control); the summary reports the task's mean episode reward.
-int run_task(const WorldConfig& cfg, const std::string& label, long long steps) {
+// An RL task (sim/task.hpp) runs through its step() under the task's built-in scripted
+// controller (position_setpoint_task: fly to the target; navigation_task: velocity towards the
+// goal, dodging what its pooled image sees; goal_box_through_gap: waypoints through the gap) or
+// zero actions; the summary reports the episodes, their terminations, the success rate, the mean
+// episode reward and the reward trend (mean step reward over the first and the last quarter).
+int run_task(const WorldConfig& cfg, const std::string& label, long long steps, bool scripted) {
   std::string err;
   std::unique_ptr<Task> task = make_task(cfg, err);
   if (!task) {
@@ -56,21 +61,27 @@ int run_task(const WorldConfig& cfg, const std::string& label, long long steps) 
     return 1;
   }
   const int n = task->num_envs(), od = task->obs_dim(), ad = task->action_dim();
+  std::vector<float> actions(static_cast<std::size_t>(n) * static_cast<std::size_t>(ad), 0.0f);
+  if (scripted && !task->scripted_actions(actions.data())) {
+    std::fprintf(stderr, "kestrel: %s: task %s has no scripted controller for controller %s; use --policy zero\n",
+                 label.c_str(), task->name(), cfg.controller.name.c_str());
+    return 1;
+  }
   std::printf("kestrel run: %s\n", label.c_str());
   std::printf("  task %s: %d envs x (%d obs, %d actions), controller %s, env %s, threads %d, seed %" PRIu64
-              ", steps %lld\n", task->name(), n, od, ad, cfg.controller.name.c_str(), cfg.env.name.c_str(),
-              task->world().num_threads(), cfg.seed, steps);
-  std::vector<float> actions(static_cast<std::size_t>(n) * static_cast<std::size_t>(ad), 0.0f);
-  double reward_sum = 0;
+              ", steps %lld, policy %s\n", task->name(), n, od, ad, cfg.controller.name.c_str(), cfg.env.name.c_str(),
+              task->world().num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
+  double reward_sum = 0, first_quarter = 0, last_quarter = 0;
+  const long long quarter = std::max(1LL, steps / 4);
   const auto t0 = std::chrono::steady_clock::now();
   for (long long s = 0; s < steps; ++s) {
-    const float* obs = task->observations();
-    for (int e = 0; e < n; ++e)
-      for (int k = 0; k < 3 && k < ad; ++k)
-        actions[static_cast<std::size_t>(e) * static_cast<std::size_t>(ad) + static_cast<std::size_t>(k)] =
-            obs[static_cast<std::size_t>(e) * static_cast<std::size_t>(od) + static_cast<std::size_t>(k)];
+    if (scripted) (void)task->scripted_actions(actions.data());
     task->step(actions.data());
-    for (int e = 0; e < n; ++e) reward_sum += static_cast<double>(task->rewards()[e]);
+    double r = 0;
+    for (int e = 0; e < n; ++e) r += static_cast<double>(task->rewards()[e]);
+    reward_sum += r;
+    if (s < quarter) first_quarter += r;
+    if (s >= steps - quarter) last_quarter += r;
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const TaskInfos& in = task->infos();
@@ -78,14 +89,24 @@ int run_task(const WorldConfig& cfg, const std::string& label, long long steps) 
   std::printf("  episodes %" PRIu64 " (terminated %" PRIu64 ", truncated %" PRIu64 "), mean episode reward %.3f, "
               "mean step reward %.4f\n", in.episodes, in.terminations, in.truncations, in.mean_episode_reward(),
               reward_sum / (static_cast<double>(steps) * n));
+  std::printf("  terminations: crashes %" PRIu64 ", successes %" PRIu64 "; success rate %.1f%%\n", in.crashes, in.successes,
+              100.0 * in.success_rate());
+  std::printf("  reward trend: mean step reward %.4f over the first quarter -> %.4f over the last quarter (%s)\n",
+              first_quarter / (static_cast<double>(quarter) * n), last_quarter / (static_cast<double>(quarter) * n),
+              // A change under 0.1 % of the first quarter's magnitude (or 1e-3 per step) is called flat.
+              std::fabs(last_quarter - first_quarter) <= 1e-3 * std::max(std::fabs(first_quarter), static_cast<double>(quarter) * n)
+                  ? "flat"
+                  : last_quarter > first_quarter ? "rising" : "falling");
+  if (std::string(task->name()) == "navigation_task")
+    std::printf("  curriculum level %d (%" PRIu64 " changes)\n", in.curriculum_level, in.curriculum_changes);
   std::printf("state hash: %016" PRIx64 "\n", task->world().state_hash());
   return 0;
 }
 
 int run(int argc, char** argv) {
-  std::string scenario, out_dir = "kestrel_out";
+  std::string scenario, out_dir = "kestrel_out", task_id;
   long long envs = -1, steps = 1000, threads = -1, seed = -1, image_env = 0;
-  bool quiet = false;
+  bool quiet = false, scripted = true;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](long long lo, long long& v) {
@@ -102,21 +123,64 @@ int run(int argc, char** argv) {
     else if (a == "--image-env") value(0, image_env);
     else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
     else if (a == "--quiet") quiet = true;
+    else if (a == "--task" && i + 1 < argc) task_id = argv[++i];
+    else if (a == "--policy" && i + 1 < argc) {
+      const std::string p = argv[++i];
+      if (p != "scripted" && p != "zero") {
+        std::fprintf(stderr, "kestrel run: --policy expects scripted or zero, got \"%s\"\n", p.c_str());
+        return 2;
+      }
+      scripted = p == "scripted";
+    }
     else if (!a.empty() && a[0] != '-' && scenario.empty()) scenario = a;
     else return usage();
   }
   WorldConfig cfg;
   std::string err;
-  const bool ok = scenario.empty() ? load_scenario_string(default_scenario_yaml(), "<embedded default>", cfg, err)
-                                   : load_scenario_file(scenario, cfg, err);
+  if (!task_id.empty() && !is_rl_task(task_id) && !registries().tasks.has(task_id)) {
+    std::fprintf(stderr, "kestrel: --task: unknown task \"%s\"; registered task ids: %s\n", task_id.c_str(),
+                 rl_task_ids_joined().c_str());
+    return 1;
+  }
+  // --task alone: the task's own scene (as a scenario `task: ID` with no other section); with a
+  // scenario: the scenario's scene with its task replaced.
+  const std::string label = !scenario.empty() ? scenario : !task_id.empty() ? "--task " + task_id : "<embedded default>";
+  const bool ok = !scenario.empty()    ? load_scenario_file(scenario, cfg, err)
+                  : !task_id.empty() ? load_scenario_string("task: " + task_id + "\n", label, cfg, err)
+                                       : load_scenario_string(default_scenario_yaml(), label, cfg, err);
   if (!ok) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
   }
+  if (!task_id.empty() && !scenario.empty() && !registries().tasks.make(task_id, cfg.task)) return 1;
   if (envs > 0) cfg.env.num_envs = static_cast<int>(envs);
   if (seed >= 0) cfg.seed = static_cast<std::uint64_t>(seed);
   cfg.num_threads = threads > 0 ? static_cast<int>(threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  if (is_rl_task(cfg.task.name)) return run_task(cfg, scenario.empty() ? "<embedded default>" : scenario, steps);
+  // Physics backend (sim/simulator.hpp): KESTREL_SIMULATOR, else the scenario's `simulator:`, else rigid.
+  Backend backend = Backend::rigid;
+  if (!resolve_backend(cfg, backend, err)) {
+    std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+    return 1;
+  }
+  if (backend == Backend::planar) {
+    if (is_rl_task(cfg.task.name)) {
+      std::fprintf(stderr, "kestrel: %s: simulator planar: task %s runs on the 3-D World; use simulator: rigid\n", label.c_str(),
+                   cfg.task.name.c_str());
+      return 1;
+    }
+    std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
+    if (!sim) {
+      std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+      return 1;
+    }
+    return run_scripted(*sim, label, steps, out_dir, quiet);
+  }
+  if (cfg.robot.name == "ground_vehicle") {
+    std::fprintf(stderr, "kestrel: %s: simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar\n",
+                 label.c_str());
+    return 1;
+  }
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, label, steps, scripted);
   std::unique_ptr<World> world = World::create(cfg, err);
   if (!world) {
     std::fprintf(stderr, "kestrel: %s: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str(), err.c_str());
@@ -202,6 +266,7 @@ int main(int argc, char** argv) {
     list_one("controllers", r.controllers);
     list_one("sensors", r.sensors);
     list_one("tasks", r.tasks);
+    list_one("simulators", r.simulators);
     return 0;
   }
   if (cmd == "run") return run(argc, argv);

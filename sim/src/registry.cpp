@@ -2,7 +2,9 @@
 // Gym's env configs (empty_env, env_with_obstacles, forest_env, dynamic_env) in spirit and scale
 // (env_with_obstacles: ~45 obstacles), not in every number.
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/task.hpp"
+#include "kestrel/sim/simulator.hpp"
 
 #include <cmath>
 
@@ -103,6 +105,7 @@ void register_sensors(Registry<SensorConfig>& s) {
 
 void register_builtins(Registries& r) {
   register_sensors(r.sensors);
+  register_simulators(r);  // rigid, planar and the planar presets (sim/src/simulator.cpp)
   r.sims.add("base_sim", "dt 0.01 s, 1 substep, gravity (0, 0, -9.81)", [] { return SimParams(); });
   r.sims.add("fast_sim", "dt 0.005 s, 1 substep", [] {
     SimParams s;
@@ -142,10 +145,13 @@ void register_builtins(Registries& r) {
     e.assets.push_back(thin);
     return e;
   });
-  r.envs.add("dynamic", "env_with_obstacles whose objects move at up to 1 m/s and bounce off the bounds", [] {
+  r.envs.add("dynamic", "env_with_obstacles whose objects move at up to 1 m/s, spin at up to 1 rad/s per axis and bounce off the bounds", [] {
     EnvConfig e = obstacle_env("dynamic");
     for (AssetClass& c : e.assets)
-      if (c.kind != AssetKind::wall) c.max_speed_m_s = 1;
+      if (c.kind != AssetKind::wall) {
+        c.max_speed_m_s = 1;
+        c.max_angular_speed_rad_s = 1;  // per-reset random angular velocity (World::move_obstacles)
+      }
     return e;
   });
 
@@ -191,6 +197,7 @@ void register_builtins(Registries& r) {
     t.kind = TaskKind::hover;
     return t;
   });
+  register_task_builtins(r);  // navigation_task, goal_box_through_gap and its room (sim/src/tasks/)
 }
 
 Registries& registries() {

@@ -8,6 +8,9 @@
 #include <stdexcept>
 
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/task.hpp"
+#include "kestrel/sim/terrain.hpp"
+#include "kestrel/sim/urdf.hpp"
 
 namespace kestrel::sim {
 
@@ -76,6 +79,45 @@ T lookup(const Registry<T>& reg, const std::string& name, const std::string& sec
   return out;
 }
 
+// `simulator: planar` or `simulator: {name: planar, vehicle: multirotor, lidar_beams: 64}`
+// (physics backend of sim/simulator.hpp; KESTREL_SIMULATOR overrides the name at run time).
+void parse_simulator(const YAML::Node& n, SimulatorConfig& s) {
+  s = lookup(registries().simulators, section_name(n, "simulator"), "simulator");
+  check_keys(n, "simulator", {"vehicle", "wheelbase_m", "max_speed_m_s", "max_steering_rad", "altitude_m", "lidar_beams",
+                              "lidar_fov_rad", "lidar_max_range_m", "max_push_vel_xy_m_s", "added_mass_kg", "com_bias_max_m",
+                              "motor_scale", "gain_scale"});
+  if (!n.IsMap()) return;
+  if (n["vehicle"]) {
+    const std::string v = n["vehicle"].Scalar();
+    if (v == "automatic") s.vehicle = PlanarVehicle::automatic;
+    else if (v == "ground_vehicle") s.vehicle = PlanarVehicle::ground_vehicle;
+    else if (v == "multirotor") s.vehicle = PlanarVehicle::multirotor;
+    else bad("simulator.vehicle", "expected one of automatic, ground_vehicle, multirotor, got \"" + v + "\"");
+  }
+  if (n["wheelbase_m"]) s.wheelbase_m = get_real(n["wheelbase_m"], "simulator.wheelbase_m", 1e-3, 100);
+  if (n["max_speed_m_s"]) s.max_speed_m_s = get_real(n["max_speed_m_s"], "simulator.max_speed_m_s", 1e-3, 1000);
+  if (n["max_steering_rad"]) s.max_steering_rad = get_real(n["max_steering_rad"], "simulator.max_steering_rad", 1e-3, 1.4);
+  if (n["altitude_m"]) s.altitude_m = get_real(n["altitude_m"], "simulator.altitude_m", -1e4, 1e4);
+  if (n["lidar_beams"]) s.lidar_beams = get_int(n["lidar_beams"], "simulator.lidar_beams", 0);
+  if (n["lidar_fov_rad"]) s.lidar_fov_rad = get_real(n["lidar_fov_rad"], "simulator.lidar_fov_rad", 1e-3, 6.2831853);
+  if (n["lidar_max_range_m"]) s.lidar_max_range_m = get_real(n["lidar_max_range_m"], "simulator.lidar_max_range_m", 1e-3, 1e4);
+  if (n["max_push_vel_xy_m_s"]) s.max_push_vel_xy_m_s = get_real(n["max_push_vel_xy_m_s"], "simulator.max_push_vel_xy_m_s", 0, 100);
+  if (n["com_bias_max_m"]) s.com_bias_max_m = get_real(n["com_bias_max_m"], "simulator.com_bias_max_m", 0, 10);
+  // Ranges as [min, max] lists.
+  auto range = [&](const char* key, real lo, real hi, real& mn, real& mx) {
+    const YAML::Node r = n[key];
+    if (!r) return;
+    const std::string f = std::string("simulator.") + key;
+    if (!r.IsSequence() || r.size() != 2) bad(f, "expected [min, max], got " + scalar_text(r));
+    mn = get_real(r[0], f + "[0]", lo, hi);
+    mx = get_real(r[1], f + "[1]", lo, hi);
+    if (mn > mx) bad(f, "expected min <= max");
+  };
+  range("added_mass_kg", -1e6, 1e6, s.added_mass_min_kg, s.added_mass_max_kg);
+  range("motor_scale", 1e-3, 1e3, s.motor_scale_min, s.motor_scale_max);
+  range("gain_scale", 1e-3, 1e3, s.gain_scale_min, s.gain_scale_max);
+}
+
 void parse_sim(const YAML::Node& n, SimParams& s) {
   s = lookup(registries().sims, section_name(n, "sim"), "sim");
   check_keys(n, "sim", {"dt_s", "substeps", "gravity_w", "integrator", "contact_stiffness_N_m", "contact_damping_N_s_m",
@@ -95,13 +137,135 @@ void parse_sim(const YAML::Node& n, SimParams& s) {
   if (n["friction_coefficient"]) s.friction_coefficient = get_real(n["friction_coefficient"], "sim.friction_coefficient", 0, 100);
 }
 
-void parse_env(const YAML::Node& n, EnvConfig& e) {
+std::string resolve_path(const std::string& dir, const std::string& path) {
+  return (!path.empty() && path[0] == '/') ? path : dir + path;
+}
+
+std::vector<real> get_real_list(const YAML::Node& n, const std::string& f) {
+  if (!n.IsSequence() || n.size() == 0) bad(f, "expected a non-empty list of numbers, got " + scalar_text(n));
+  std::vector<real> v;
+  for (std::size_t i = 0; i < n.size(); ++i) v.push_back(get_real(n[i], f + "[" + std::to_string(i) + "]", -1e6, 1e6));
+  return v;
+}
+
+/// env.terrain (TerrainConfig; files are read when the world is built, see sim/terrain.hpp).
+void parse_terrain(const YAML::Node& n, TerrainConfig& t, const std::string& dir, const std::string& source) {
+  const std::string f = "env.terrain";
+  if (!n.IsMap() || !n["type"]) bad(f, "expected a map with `type` (plane, heightfield or trimesh)");
+  check_keys(n, f, {"type", "horizontal_scale_m", "vertical_scale_m", "origin_m", "heights_m", "image_file", "procedural",
+                    "length_x_m", "width_y_m", "slope", "platform_size_m", "step_width_m", "step_height_m", "min_height_m",
+                    "max_height_m", "height_step_m", "downsampled_scale_m", "num_waves", "amplitude_m", "mesh_file",
+                    "measure_heights", "measured_points_x", "measured_points_y"});
+  t = TerrainConfig();
+  t.source_file = source;
+  const std::string type = n["type"].Scalar();
+  if (type == "plane") t.type = TerrainType::plane;
+  else if (type == "heightfield") t.type = TerrainType::heightfield;
+  else if (type == "trimesh") t.type = TerrainType::trimesh;
+  else bad(f + ".type", "expected one of plane, heightfield, trimesh, got \"" + type + "\"");
+  if (n["horizontal_scale_m"]) t.horizontal_scale_m = get_real(n["horizontal_scale_m"], f + ".horizontal_scale_m", 1e-4, 1e3);
+  if (n["vertical_scale_m"]) t.vertical_scale_m = get_real(n["vertical_scale_m"], f + ".vertical_scale_m", 1e-9, 1e3);
+  if (n["origin_m"]) t.origin_m = get_vec3(n["origin_m"], f + ".origin_m");
+  if (const YAML::Node h = n["heights_m"]) {
+    if (!h.IsSequence() || h.size() < 2) bad(f + ".heights_m", "expected a list of >= 2 rows (row j = y index j) of >= 2 heights");
+    for (std::size_t j = 0; j < h.size(); ++j) {
+      const std::vector<real> row = get_real_list(h[j], f + ".heights_m[" + std::to_string(j) + "]");
+      if (j == 0) t.nx = static_cast<int>(row.size());
+      if (static_cast<int>(row.size()) != t.nx || t.nx < 2)
+        bad(f + ".heights_m[" + std::to_string(j) + "]", "expected " + std::to_string(std::max(t.nx, 2)) + " heights, as every row");
+      t.heights_m.insert(t.heights_m.end(), row.begin(), row.end());
+    }
+    t.ny = static_cast<int>(h.size());
+  }
+  if (n["image_file"]) t.image_file = resolve_path(dir, n["image_file"].Scalar());
+  if (n["mesh_file"]) t.mesh_file = resolve_path(dir, n["mesh_file"].Scalar());
+  if (n["procedural"]) {
+    t.procedural = n["procedural"].Scalar();
+    const std::string names = terrain_procedural_names();
+    bool known = false;
+    std::istringstream ns(names);
+    for (std::string w; std::getline(ns, w, ',');) known = known || (w.substr(w.find_first_not_of(' ')) == t.procedural);
+    if (!known) bad(f + ".procedural", "unknown generator \"" + t.procedural + "\"; allowed: " + names);
+  }
+  if (n["length_x_m"]) t.length_x_m = get_real(n["length_x_m"], f + ".length_x_m", 1e-3, 1e4);
+  if (n["width_y_m"]) t.width_y_m = get_real(n["width_y_m"], f + ".width_y_m", 1e-3, 1e4);
+  if (n["slope"]) t.slope = get_real(n["slope"], f + ".slope", -100, 100);
+  if (n["platform_size_m"]) t.platform_size_m = get_real(n["platform_size_m"], f + ".platform_size_m", 0, 1e4);
+  if (n["step_width_m"]) t.step_width_m = get_real(n["step_width_m"], f + ".step_width_m", 1e-4, 1e4);
+  if (n["step_height_m"]) t.step_height_m = get_real(n["step_height_m"], f + ".step_height_m", -100, 100);
+  if (n["min_height_m"]) t.min_height_m = get_real(n["min_height_m"], f + ".min_height_m", -1e3, 1e3);
+  if (n["max_height_m"]) t.max_height_m = get_real(n["max_height_m"], f + ".max_height_m", -1e3, 1e3);
+  if (n["height_step_m"]) t.height_step_m = get_real(n["height_step_m"], f + ".height_step_m", 1e-6, 1e3);
+  if (n["downsampled_scale_m"]) t.downsampled_scale_m = get_real(n["downsampled_scale_m"], f + ".downsampled_scale_m", 1e-4, 1e4);
+  if (n["num_waves"]) t.num_waves = get_int(n["num_waves"], f + ".num_waves", 1);
+  if (n["amplitude_m"]) t.amplitude_m = get_real(n["amplitude_m"], f + ".amplitude_m", -100, 100);
+  if (n["measure_heights"]) t.measure_heights = get_bool(n["measure_heights"], f + ".measure_heights");
+  if (n["measured_points_x"]) t.measured_points_x_m = get_real_list(n["measured_points_x"], f + ".measured_points_x");
+  if (n["measured_points_y"]) t.measured_points_y_m = get_real_list(n["measured_points_y"], f + ".measured_points_y");
+  if (t.type == TerrainType::heightfield) {
+    const int sources = (t.heights_m.empty() ? 0 : 1) + (t.image_file.empty() ? 0 : 1) + (t.procedural.empty() ? 0 : 1);
+    if (sources != 1) bad(f, "type heightfield needs exactly one of heights_m, image_file, procedural");
+  }
+  if (t.type == TerrainType::trimesh && t.mesh_file.empty()) bad(f + ".mesh_file", "missing (type trimesh needs an .obj or .stl file)");
+}
+
+/// env.assets: extra asset classes (e.g. meshes from OBJ/STL files), appended to the env's classes.
+void parse_assets(const YAML::Node& n, EnvConfig& e, const std::string& dir) {
+  if (!n.IsSequence()) bad("env.assets", "expected a list of asset class maps");
+  const std::pair<const char*, AssetKind> kinds[] = {{"tree", AssetKind::tree},       {"panel", AssetKind::panel},
+                                                     {"cube", AssetKind::cube},       {"rod", AssetKind::rod},
+                                                     {"small_wall", AssetKind::small_wall}, {"wall", AssetKind::wall},
+                                                     {"thin", AssetKind::thin},       {"sphere", AssetKind::sphere},
+                                                     {"mesh", AssetKind::mesh}};
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const YAML::Node a = n[i];
+    std::string f = "env.assets[" + std::to_string(i) + "]";
+    if (!a.IsMap() || !a["name"] || !a["kind"]) bad(f, "expected a map with `name` and `kind`");
+    AssetClass c;
+    c.name = a["name"].Scalar();
+    f = "env.assets." + c.name;
+    for (const AssetClass& o : e.assets)
+      if (o.name == c.name) bad(f, "duplicate asset class name");
+    check_keys(a, f, {"kind", "num_assets", "min_num_assets", "min_position_ratio", "max_position_ratio", "min_euler_rad",
+                      "max_euler_rad", "min_size_m", "max_size_m", "keep_in_env", "semantic_id", "max_speed_m_s",
+                      "max_angular_speed_rad_s", "mesh_file"});
+    const std::string k = a["kind"].Scalar();
+    bool found = false;
+    for (const auto& p : kinds)
+      if (k == p.first) {
+        c.kind = p.second;
+        found = true;
+      }
+    if (!found) bad(f + ".kind", "expected one of tree, panel, cube, rod, small_wall, wall, thin, sphere, mesh, got \"" + k + "\"");
+    if (a["num_assets"]) c.num_assets = get_int(a["num_assets"], f + ".num_assets", 0);
+    c.min_num_assets = a["min_num_assets"] ? get_int(a["min_num_assets"], f + ".min_num_assets", 0) : c.num_assets;
+    if (c.min_num_assets > c.num_assets) bad(f + ".min_num_assets", "expected <= num_assets");
+    if (a["min_position_ratio"]) c.min_position_ratio = get_vec3(a["min_position_ratio"], f + ".min_position_ratio");
+    if (a["max_position_ratio"]) c.max_position_ratio = get_vec3(a["max_position_ratio"], f + ".max_position_ratio");
+    if (a["min_euler_rad"]) c.min_euler_rad = get_vec3(a["min_euler_rad"], f + ".min_euler_rad");
+    if (a["max_euler_rad"]) c.max_euler_rad = get_vec3(a["max_euler_rad"], f + ".max_euler_rad");
+    if (a["min_size_m"]) c.min_size_m = get_vec3(a["min_size_m"], f + ".min_size_m");
+    if (a["max_size_m"]) c.max_size_m = get_vec3(a["max_size_m"], f + ".max_size_m");
+    if (a["keep_in_env"]) c.keep_in_env = get_bool(a["keep_in_env"], f + ".keep_in_env");
+    if (a["semantic_id"]) c.semantic_id = get_int(a["semantic_id"], f + ".semantic_id", 0);
+    if (a["max_speed_m_s"]) c.max_speed_m_s = get_real(a["max_speed_m_s"], f + ".max_speed_m_s", 0, 1000);
+    if (a["max_angular_speed_rad_s"]) c.max_angular_speed_rad_s = get_real(a["max_angular_speed_rad_s"], f + ".max_angular_speed_rad_s", 0, 1000);
+    if (a["mesh_file"]) c.mesh_file = resolve_path(dir, a["mesh_file"].Scalar());
+    if (c.kind == AssetKind::mesh && c.mesh_file.empty()) bad(f + ".mesh_file", "missing (kind mesh needs an .obj or .stl file)");
+    if (c.kind != AssetKind::mesh && !c.mesh_file.empty()) bad(f + ".mesh_file", "only for kind mesh");
+    if (e.assets.size() >= 255) bad(f, "too many asset classes (at most 255)");
+    e.assets.push_back(c);
+  }
+}
+
+void parse_env(const YAML::Node& n, EnvConfig& e, const std::string& dir, const std::string& source) {
   e = lookup(registries().envs, section_name(n, "env"), "env");
   check_keys(n, "env", {"num_envs", "num_physics_steps_per_env_step_mean", "num_physics_steps_per_env_step_std",
                         "lower_bound_min", "lower_bound_max", "upper_bound_min", "upper_bound_max", "reset_on_collision",
                         "collision_force_threshold", "create_ground_plane", "keep_same_env_for_num_episodes",
                         "sample_timestep_for_latency", "max_latency_physics_steps", "perturb_observations",
-                        "enable_disturbance", "prob_apply_disturbance", "curriculum_level", "include_asset_type"});
+                        "enable_disturbance", "prob_apply_disturbance", "curriculum_level", "include_asset_type", "assets",
+                        "terrain"});
   if (!n.IsMap()) return;
   if (n["num_envs"]) e.num_envs = get_int(n["num_envs"], "env.num_envs", 1);
   if (n["num_physics_steps_per_env_step_mean"])
@@ -140,12 +304,19 @@ void parse_env(const YAML::Node& n, EnvConfig& e) {
       if (!found) bad("env.include_asset_type." + cls, "unknown asset class; known: " + (known.empty() ? std::string("(none)") : known));
     }
   }
+  if (n["assets"]) parse_assets(n["assets"], e, dir);
+  if (n["terrain"]) parse_terrain(n["terrain"], e.terrain, dir, source);
 }
 
-void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& where) {
+void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& where, const std::string& dir) {
   check_keys(n, where, {"robots_per_env", "mass_kg", "inertia_diag_kg_m2", "airframe", "collision_shape", "use_desaturation",
-                        "linear_drag_b", "quadratic_drag_b", "angular_drag_b", "quadratic_angular_drag_b", "file"});
+                        "linear_drag_b", "quadratic_drag_b", "angular_drag_b", "quadratic_angular_drag_b", "file", "urdf"});
   if (!n.IsMap()) return;
+  if (n["urdf"]) {
+    // Mass, inertia, collision shape and rotors from a URDF (sim/urdf.hpp); the fields below override it.
+    std::string err;
+    if (!apply_urdf(resolve_path(dir, n["urdf"].Scalar()), r, err)) bad(where + ".urdf", err);
+  }
   if (n["robots_per_env"]) r.robots_per_env = get_int(n["robots_per_env"], where + ".robots_per_env", 1);
   if (n["mass_kg"]) r.mass_kg = get_real(n["mass_kg"], where + ".mass_kg", 1e-6, 1e6);
   if (n["inertia_diag_kg_m2"]) r.inertia_diag_kg_m2 = get_vec3(n["inertia_diag_kg_m2"], where + ".inertia_diag_kg_m2");
@@ -194,19 +365,25 @@ void parse_robot(const YAML::Node& n, RobotConfig& r, const std::string& dir) {
     } catch (const YAML::Exception& ex) {
       bad("robot.file", "cannot read robot file \"" + full + "\": " + ex.what());
     }
-    parse_robot_map(rf, r, "robot.file(" + path + ")");
+    const std::size_t slash = full.find_last_of('/');  // a URDF named in the robot file is relative to it
+    parse_robot_map(rf, r, "robot.file(" + path + ")", slash == std::string::npos ? std::string() : full.substr(0, slash + 1));
   }
-  parse_robot_map(n, r, "robot");
+  parse_robot_map(n, r, "robot", dir);
 }
 
-WorldConfig parse(const YAML::Node& root, const std::string& dir) {
+WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::string& source) {
   if (!root.IsMap()) bad("(top level)", "expected a map with sim, env, robot, controller, task, sensors, seed");
-  check_keys(root, "(top level)", {"sim", "env", "robot", "controller", "task", "sensors", "seed", "threads"});
+  check_keys(root, "(top level)", {"sim", "env", "robot", "controller", "task", "sensors", "seed", "threads", "simulator"});
   WorldConfig c;
-  parse_sim(root["sim"] ? root["sim"] : YAML::Node("base_sim"), c.sim);
-  parse_env(root["env"] ? root["env"] : YAML::Node("empty"), c.env);
-  parse_robot(root["robot"] ? root["robot"] : YAML::Node("base_quadrotor"), c.robot, dir);
-  const YAML::Node ctrl = root["controller"] ? root["controller"] : YAML::Node("lee_position_control");
+  // An RL task (sim/task.hpp) brings its own scene: the sections the file leaves out default to
+  // the task's sim, env, robot, controller and sensors instead of the harness defaults.
+  TaskDefaults td;
+  const bool task_scene = root["task"] && (root["task"].IsScalar() || root["task"].IsMap()) &&
+                          task_defaults(section_name(root["task"], "task"), td);
+  parse_sim(root["sim"] ? root["sim"] : YAML::Node(td.sim), c.sim);
+  parse_env(root["env"] ? root["env"] : YAML::Node(td.env), c.env, dir, source);
+  parse_robot(root["robot"] ? root["robot"] : YAML::Node(td.robot), c.robot, dir);
+  const YAML::Node ctrl = root["controller"] ? root["controller"] : YAML::Node(td.controller);
   c.controller = lookup(registries().controllers, section_name(ctrl, "controller"), "controller");
   check_keys(ctrl, "controller", {"randomize_gains"});
   if (ctrl.IsMap() && ctrl["randomize_gains"]) c.controller.randomize_gains = get_bool(ctrl["randomize_gains"], "controller.randomize_gains");
@@ -223,6 +400,13 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir) {
   if (task.IsMap() && task["episode_len_env_steps"]) c.task.episode_len_env_steps = get_int(task["episode_len_env_steps"], "task.episode_len_env_steps", 1);
   if (task.IsMap() && task["success_radius_m"]) c.task.success_radius_m = get_real(task["success_radius_m"], "task.success_radius_m", 0, 1e6);
   // Sensors attach to the robot: `sensors: [base_depth_camera, {name: vl53l5cx, every: 2}]`.
+  if (task_scene && !root["sensors"]) {
+    for (const auto& ts : td.sensors) {
+      SensorConfig sc = lookup(registries().sensors, ts.first, "sensors");
+      sc.every_env_steps = ts.second;
+      c.robot.sensors.push_back(sc);
+    }
+  }
   if (const YAML::Node s = root["sensors"]) {
     if (!s.IsSequence()) bad("sensors", "expected a list of sensor names or {name, every} maps");
     for (std::size_t i = 0; i < s.size(); ++i) {
@@ -234,6 +418,7 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir) {
       c.robot.sensors.push_back(sc);
     }
   }
+  if (root["simulator"]) parse_simulator(root["simulator"], c.simulator);
   if (root["seed"]) c.seed = static_cast<std::uint64_t>(get_int(root["seed"], "seed", 0));
   if (root["threads"]) c.num_threads = get_int(root["threads"], "threads", 1);
   return c;
@@ -242,7 +427,7 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir) {
 bool load(const std::function<YAML::Node()>& read, const std::string& name, const std::string& dir, WorldConfig& out,
           std::string& error) {
   try {
-    WorldConfig tmp = parse(read(), dir);
+    WorldConfig tmp = parse(read(), dir, name);
     out = tmp;  // only a fully validated config reaches the caller
     return true;
   } catch (const ScenarioError& e) {

@@ -6,6 +6,9 @@
 #include <cstring>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/custom_task.hpp"
+#include "kestrel/sim/navigation_task.hpp"
+#include "tasks/task_access.hpp"
 
 namespace kestrel::sim {
 
@@ -74,6 +77,52 @@ class PositionSetpointTask final : public Task {
 
   const char* name() const override { return "position_setpoint_task"; }
 
+  // Fly to the target: lee_position_control gets the observed error as its (relative) setpoint;
+  // lee_velocity_control a velocity along the error (gain 1 /s, at most 2 m/s); lee_attitude_control
+  // (Aerial Gym's shipped controller for this task) a PD acceleration turned into collective
+  // thrust and roll/pitch as that controller reads them (fz = (a0 + 1) m |g|, R_d = Euler(roll,
+  // pitch, current yaw), see golden/README.md). Direct motor commands have none.
+  bool scripted_actions(float* actions) const override {
+    const ControllerKind kind = world_->config().controller.kind;
+    if (kind != ControllerKind::lee_position && kind != ControllerKind::lee_velocity && kind != ControllerKind::lee_attitude)
+      return false;
+    const real g = world_->config().sim.gravity_w.norm();
+    for (int env = 0; env < num_envs_; ++env) {
+      const float* o = &obs_[static_cast<std::size_t>(env) * kPsObsDim];
+      float* a = actions + static_cast<std::size_t>(env) * kPsActionDim;
+      const task_access::RobotView r = task_access::robot(*world_, env);
+      const Vec3 e_w(o[0], o[1], o[2]);
+      if (kind == ControllerKind::lee_position) {
+        for (int k = 0; k < 3; ++k) a[k] = o[k];
+        a[3] = static_cast<float>(task_access::yaw_of(r.orientation_wb));  // absolute yaw: keep it
+      } else if (kind == ControllerKind::lee_velocity) {
+        Vec3 v = task_access::world_to_vehicle(r.orientation_wb, e_w);
+        if (v.norm() > 2) v *= 2 / v.norm();
+        for (int k = 0; k < 3; ++k) a[k] = static_cast<float>(v[k]);
+        a[3] = 0;
+      } else {
+        // a_des = kp e - kd v (kp 2 /s^2, kd 2.5 /s: damped), horizontal part capped at 3 m/s^2.
+        Vec3 acc = 2 * e_w - 2.5_r * r.linvel_w;
+        const real h = std::sqrt(acc[0] * acc[0] + acc[1] * acc[1]);
+        if (h > 3) {
+          acc[0] *= 3 / h;
+          acc[1] *= 3 / h;
+        }
+        acc[2] = std::max(-0.5_r * g, std::min(0.5_r * g, acc[2]));
+        const Vec3 acc_v = task_access::world_to_vehicle(r.orientation_wb, acc);
+        const real up = g + acc_v[2];
+        const real pitch = std::atan2(acc_v[0], up);
+        const real roll = std::atan2(-acc_v[1], std::sqrt(acc_v[0] * acc_v[0] + up * up));
+        const real f = std::sqrt(acc_v[0] * acc_v[0] + acc_v[1] * acc_v[1] + up * up);  // |F| / m
+        a[0] = static_cast<float>(f / g - 1);  // the controller does not compensate tilt: ask for |F|
+        a[1] = static_cast<float>(roll);
+        a[2] = static_cast<float>(pitch);
+        a[3] = 0;
+      }
+    }
+    return true;
+  }
+
   void reset() override {
     for (int env = 0; env < num_envs_; ++env) reset_one(env);
   }
@@ -117,8 +166,12 @@ class PositionSetpointTask final : public Task {
       episode_reward_[static_cast<std::size_t>(env)] += static_cast<double>(r);
       if (crash || trunc) {
         ++infos_.episodes;
-        if (crash) ++infos_.terminations;
-        else ++infos_.truncations;
+        if (crash) {
+          ++infos_.terminations;
+          ++infos_.crashes;
+        } else {
+          ++infos_.truncations;
+        }
         infos_.episode_reward_sum += episode_reward_[static_cast<std::size_t>(env)];
         episode_reward_[static_cast<std::size_t>(env)] = 0;
         world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
@@ -179,7 +232,53 @@ TaskConfig position_setpoint_task_config() {
   return t;
 }
 
-bool is_rl_task(const std::string& task_name) { return task_name == "position_setpoint_task"; }
+void min_pool_ranges(const real* ranges, int height, int width, real max_range_m, int rows, int cols, float* out) {
+  for (int i = 0; i < rows; ++i) {
+    const int r0 = i * height / rows, r1 = (i + 1) * height / rows;
+    for (int j = 0; j < cols; ++j) {
+      const int c0 = j * width / cols, c1 = (j + 1) * width / cols;
+      real m = max_range_m;
+      for (int r = r0; r < r1; ++r)
+        for (int c = c0; c < c1; ++c) {
+          const real v = ranges[static_cast<std::size_t>(r) * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)];
+          if (v >= 0 && v < m) m = v;  // false for NaN: no return
+        }
+      out[i * cols + j] = static_cast<float>(max_range_m > 0 ? std::min(1.0_r, m / max_range_m) : 1.0_r);
+    }
+  }
+}
+
+std::vector<std::string> rl_task_ids() {
+  std::vector<std::string> ids = {"navigation_task", "position_setpoint_task"};
+  for (const std::string& c : custom_tasks().names()) ids.push_back(c);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+std::string rl_task_ids_joined() {
+  std::string s;
+  for (const std::string& id : rl_task_ids()) s += (s.empty() ? "" : ", ") + id;
+  return s;
+}
+
+bool is_rl_task(const std::string& task_name) {
+  return task_name == "position_setpoint_task" || task_name == "navigation_task" || custom_tasks().has(task_name);
+}
+
+bool task_defaults(const std::string& task_name, TaskDefaults& out) {
+  if (task_name == "position_setpoint_task") {
+    out = TaskDefaults();
+    return true;
+  }
+  if (task_name == "navigation_task") {
+    out = navigation_task_defaults();
+    return true;
+  }
+  CustomTaskSpec spec;
+  if (!custom_tasks().make(task_name, spec)) return false;
+  out = spec.defaults;
+  return true;
+}
 
 std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std::string& error) {
   if (config.robot.robots_per_env != 1) {
@@ -196,8 +295,11 @@ std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std
 }
 
 std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error) {
-  if (config.task.name == "position_setpoint_task") return make_position_setpoint_task(config, error);
-  error = "unknown task '" + config.task.name + "' (tasks: position_setpoint_task)";
+  const std::string& id = config.task.name;
+  if (id == "position_setpoint_task") return make_position_setpoint_task(config, error);
+  if (id == "navigation_task") return make_navigation_task(config, NavigationParams(), error);
+  if (custom_tasks().has(id)) return make_custom_task(config, error);
+  error = "unknown task '" + id + "'; registered task ids: " + rl_task_ids_joined();
   return nullptr;
 }
 

@@ -16,6 +16,7 @@
 
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/sim/mesh.hpp"
+#include "kestrel/sim/terrain.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 
 namespace kestrel::sim {
@@ -75,11 +76,27 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   w->robots_per_env_ = config.robot.robots_per_env;
 
   // Robot models (validated by the core's own checks).
-  const al::AirframeSpec& spec = al::airframe_spec(config.robot.airframe);
+  al::AirframeSpec spec = al::airframe_spec(config.robot.airframe);
+  const std::size_t n_urdf_rotors = config.robot.rotors.size();
+  if (n_urdf_rotors > 0) {
+    // Rotor geometry from a URDF (sim/urdf.hpp) over the preset's limits and motor constants.
+    if (n_urdf_rotors > static_cast<std::size_t>(al::kMaxRotors) || config.robot.rotor_directions.size() != n_urdf_rotors)
+      return fail("robot.rotors: expected 1.." + std::to_string(al::kMaxRotors) + " rotors, each with a direction");
+    spec.num_rotors = static_cast<int>(n_urdf_rotors);
+    spec.source = al::AirframeSource::rotor_geometry;
+    for (std::size_t m = 0; m < n_urdf_rotors; ++m) {
+      spec.rotors[m] = config.robot.rotors[m];
+      spec.direction[m] = config.robot.rotor_directions[m];
+    }
+  }
   if (al::make_airframe(spec, w->airframe_) != Status::ok) return fail("robot.airframe: invalid airframe");
   const Status am = al::build_allocation_model(w->airframe_, w->alloc_model_);
   if (am != Status::ok && am != Status::singular) return fail("robot.airframe: allocation model failed");  // quads: rank 4
   w->motor_cfg_ = al::motor_model_preset(config.robot.airframe);
+  if (n_urdf_rotors > 0) {
+    w->motor_cfg_.num_motors = spec.num_rotors;
+    for (int m = 0; m < al::kMaxRotors; ++m) w->motor_cfg_.direction[m] = m < spec.num_rotors ? spec.direction[m] : 0;
+  }
   if (al::validate(w->motor_cfg_) != Status::ok) return fail("robot.motor_model: invalid motor model");
   RigidBodyParams bp;
   bp.mass_kg = config.robot.mass_kg;
@@ -117,12 +134,36 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
 
   // Mesh obstacles: loaded once here; shapes point into this storage, which never reallocates.
   w->mesh_vertices_.resize(e.assets.size());
+  w->render_meshes_.resize(e.assets.size());
   for (std::size_t ci = 0; ci < e.assets.size(); ++ci) {
     if (e.assets[ci].kind != AssetKind::mesh) continue;
     TriangleMesh mesh;
     std::string merr;
     if (!load_mesh(e.assets[ci].mesh_file, mesh, merr)) return fail("env.assets." + e.assets[ci].name + ": " + merr);
+    w->render_meshes_[ci].reset(new SceneMesh());
+    if (!w->render_meshes_[ci]->build(mesh, Vec3::Zero()))
+      return fail("env.assets." + e.assets[ci].name + ": " + e.assets[ci].mesh_file + ": mesh BVH build failed");
     w->mesh_vertices_[ci] = std::move(mesh.vertices);
+  }
+  for (const AssetClass& c : e.assets) {
+    if (!(c.max_angular_speed_rad_s >= 0)) return fail("env.assets." + c.name + ".max_angular_speed_rad_s: expected a number >= 0");
+    w->obstacles_rotate_ = w->obstacles_rotate_ || (c.max_angular_speed_rad_s > 0 && c.kind != AssetKind::wall);
+  }
+  // Terrain (shared by every environment) and the measured_heights storage.
+  if (!Terrain::build(e.terrain, config.seed, w->terrain_, error)) return std::unique_ptr<World>();
+  if (e.terrain.measure_heights) {
+    const std::vector<real>& px = e.terrain.measured_points_x_m;
+    const std::vector<real>& py = e.terrain.measured_points_y_m;
+    if (px.empty() || py.empty()) return fail("env.terrain.measured_points_x/y: expected non-empty lists");
+    for (real x : px)
+      for (real y : py) {
+        w->height_points_x_b_.push_back(x);
+        w->height_points_y_b_.push_back(y);
+      }
+    w->height_points_ = static_cast<int>(w->height_points_x_b_.size());
+    w->measured_heights_.assign(static_cast<std::size_t>(e.num_envs) * static_cast<std::size_t>(config.robot.robots_per_env) *
+                                    static_cast<std::size_t>(w->height_points_),
+                                0);
   }
   int cap = 0;
   for (const AssetClass& c : e.assets) cap += asset_class_slots(c);
@@ -165,6 +206,7 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
     w->reset_env(env);
     w->stats_[env].resets = 0;  // the initial reset is not counted
   }
+  w->batch_ = w->batch_eligible();
   w->pool_.reset(new ThreadPool(std::min(config.num_threads, w->num_envs_)));
   return w;
 }
@@ -187,6 +229,10 @@ void World::generate_layout(int env, RngStream& rng) {
       o.class_index = static_cast<std::uint8_t>(ci);
       o.linvel_w = Vec3::Zero();
       if (c.max_speed_m_s > 0) o.linvel_w = uniform_vec(rng, Vec3::Constant(-c.max_speed_m_s), Vec3::Constant(c.max_speed_m_s));
+      // Drawn only for rotating classes, so layouts without rotation keep their stream positions.
+      o.angvel_w = Vec3::Zero();
+      if (c.max_angular_speed_rad_s > 0 && c.kind != AssetKind::wall)
+        o.angvel_w = uniform_vec(rng, Vec3::Constant(-c.max_angular_speed_rad_s), Vec3::Constant(c.max_angular_speed_rad_s));
     };
     if (c.kind == AssetKind::wall) {
       // Thin boxes just outside the bounds (they bound the flight volume, Aerial Gym's walls).
@@ -320,6 +366,11 @@ bool World::overlaps_obstacle(int env, const Shape& s) const {
 }
 
 bool World::clear_point(int env, const Vec3& p) const {
+  // Above the terrain by the bounding sphere and the clearance (heightfield / mesh terrain only:
+  // the ground plane lies under the bounds by construction).
+  if (terrain_->type() != TerrainType::plane &&
+      !(p[2] - terrain_->height_at(p[0], p[1]) > robot_bound_radius_m_ + cfg_.task.clearance_m))
+    return false;
   Shape s;
   s.type = ShapeType::sphere;
   s.radius_m = robot_bound_radius_m_ + cfg_.task.clearance_m;
@@ -331,6 +382,14 @@ bool World::clear_segment(int env, const Vec3& a, const Vec3& b) const {
   const Vec3 d = b - a;
   const real len = d.norm();
   if (!(len > 1e-6_r)) return clear_point(env, a);
+  if (terrain_->type() != TerrainType::plane) {
+    // The path over the terrain, checked every 0.1 m.
+    const int steps = static_cast<int>(len / 0.1_r) + 1;
+    for (int k = 0; k <= steps; ++k) {
+      const Vec3 p = a + d * (static_cast<real>(k) / static_cast<real>(steps));
+      if (!(p[2] - terrain_->height_at(p[0], p[1]) > robot_bound_radius_m_ + cfg_.task.clearance_m)) return false;
+    }
+  }
   // The swept bounding sphere: a capsule from a to b (local z along the segment).
   Shape s;
   s.type = ShapeType::capsule;
@@ -433,6 +492,29 @@ void World::reset_env(int env) {
   ++stats_[env].resets;
   // The new episode's first observation sees the new layout and start.
   if (any_ray_sensor_) render_ray_sensors(env, true);
+  if (height_points_ > 0) update_measured_heights(env);
+}
+
+real World::ground_height(real x_w, real y_w, int env) const {
+  if (terrain_->type() != TerrainType::plane) return terrain_->height_at(x_w, y_w);
+  if (!cfg_.env.create_ground_plane) return -1e30_r;
+  return lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r;
+}
+
+void World::update_measured_heights(int env) {
+  // legged_gym _get_heights: the points rotated by the base yaw (quat_apply_yaw) around the base.
+  for (int r = 0; r < robots_per_env_; ++r) {
+    const std::size_t i = index(env, r);
+    const RigidBodyState& st = state_[i];
+    const Vec3 fwd = rotate(st.orientation_wb, Vec3::UnitX());
+    const real fn = std::sqrt(fwd[0] * fwd[0] + fwd[1] * fwd[1]);
+    const real c = fn > 1e-6_r ? fwd[0] / fn : 1_r, s = fn > 1e-6_r ? fwd[1] / fn : 0_r;
+    real* out = &measured_heights_[i * static_cast<std::size_t>(height_points_)];
+    for (int k = 0; k < height_points_; ++k) {
+      const real px = height_points_x_b_[static_cast<std::size_t>(k)], py = height_points_y_b_[static_cast<std::size_t>(k)];
+      out[k] = ground_height(st.position_w[0] + c * px - s * py, st.position_w[1] + s * px + c * py, env);
+    }
+  }
 }
 
 void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_action) {
@@ -485,12 +567,26 @@ void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_actio
 void World::move_obstacles(int env) {
   Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   const int n = num_obstacles_[env];
+  if (n == 0) return;  // the empty environment: nothing to move (hot path)
   const real dt = cfg_.sim.dt_s;
   const Vec3 lo = lower_w_[env], hi = upper_w_[env];
   bool moved = false;
   for (int i = 0; i < n; ++i) {
-    if (o[i].linvel_w.isZero()) continue;
+    if (o[i].linvel_w.isZero() && o[i].angvel_w.isZero()) continue;
     moved = true;
+    if (!o[i].angvel_w.isZero()) {
+      // Constant world-frame angular velocity: q <- exp(w dt) q, the exact rotation of one step
+      // (axis-angle to quaternion), renormalised against round-off drift.
+      const Vec3 rot = dt * o[i].angvel_w;
+      const real angle = rot.norm();
+      if (angle > 0) {
+        const real half = angle / 2;
+        const Vec3 axis = rot / angle;
+        const real sh = std::sin(half);
+        const Quat dq = quat_from_xyzw(axis[0] * sh, axis[1] * sh, axis[2] * sh, std::cos(half));
+        o[i].shape.orientation_wb = (dq * o[i].shape.orientation_wb).normalized();
+      }
+    }
     o[i].shape.position_w += dt * o[i].linvel_w;
     for (int k = 0; k < 3; ++k) {  // bounce off the env bounds
       if ((o[i].shape.position_w[k] < lo[k] && o[i].linvel_w[k] < 0) || (o[i].shape.position_w[k] > hi[k] && o[i].linvel_w[k] > 0))
@@ -515,6 +611,21 @@ void World::collide_robots(int env) {
   const SimParams& sp = cfg_.sim;
   const Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   const int n = num_obstacles_[env];
+  if (n == 0 && robots_per_env_ == 1 && cfg_.robot.shape.type == ShapeType::sphere && terrain_->type() == TerrainType::plane) {
+    // Fast path, the empty environment's common case: one sphere robot, no obstacles, and the
+    // sphere clear of the ground plane (collide_plane's own test). Nothing touches it, so this
+    // stores what the pass below would: zero force, the zero torque rotated into the body frame
+    // (its signed zeros), and a crash only if the threshold were negative.
+    const std::size_t i = index(env, 0);
+    const RigidBodyState& st = state_[i];
+    const real plane_z = lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r;
+    if (!cfg_.env.create_ground_plane || st.position_w[2] - cfg_.robot.shape.radius_m >= plane_z) {
+      contact_force_w_[i] = Vec3::Zero();
+      contact_torque_b_[i] = rotate_inverse(st.orientation_wb, Vec3::Zero());
+      if (0_r > cfg_.env.collision_force_threshold_N) crashed_[i] = 1;
+      return;
+    }
+  }
   for (int r = 0; r < robots_per_env_; ++r) {
     const std::size_t i = index(env, r);
     const RigidBodyState& st = state_[i];
@@ -538,12 +649,22 @@ void World::collide_robots(int env) {
       torque_w += arm.cross(f);
       normal_force_sum += fn;
     };
-    if (cfg_.env.create_ground_plane) respond(collide_plane(me, lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r), Vec3::Zero());
+    if (terrain_->type() != TerrainType::plane) {
+      // Height-field / mesh terrain replaces the ground plane (sim/terrain.hpp).
+      Contact tk[kMaxTerrainContacts];
+      const int nt = terrain_->collide(me, robot_bound_radius_m_, tk);
+      for (int c = 0; c < nt; ++c) respond(tk[c], Vec3::Zero());
+    } else if (cfg_.env.create_ground_plane) {
+      respond(collide_plane(me, lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r), Vec3::Zero());
+    }
     for (int k = 0; k < n && o[k].aabb_min_w[0] <= mx[0]; ++k) {
       if (o[k].aabb_max_w[0] < mn[0] || o[k].aabb_max_w[1] < mn[1] || o[k].aabb_min_w[1] > mx[1] ||
           o[k].aabb_max_w[2] < mn[2] || o[k].aabb_min_w[2] > mx[2])
         continue;
-      respond(collide(me, o[k].shape), o[k].linvel_w);
+      const Contact ok = collide(me, o[k].shape);
+      // A rotating obstacle's surface moves at v + w x r at the contact point.
+      respond(ok, ok.hit && !o[k].angvel_w.isZero() ? Vec3(o[k].linvel_w + o[k].angvel_w.cross(ok.point_w - o[k].shape.position_w))
+                                                    : o[k].linvel_w);
     }
     for (int q = 0; q < robots_per_env_; ++q) {
       if (q == r) continue;
@@ -562,13 +683,25 @@ void World::physics_step(int env, bool use_new_action) {
     robot_dynamics(env, r, index(env, r), use_new_action);
     if (any_imu_) update_imus(env, r, v0);
   }
+  physics_step_tail(env);
+}
+
+// What a physics step does after the robots' dynamics (shared with the batched path).
+void World::physics_step_tail(int env) {
   move_obstacles(env);
   collide_robots(env);
 }
 
 void World::env_step(int env) {
+  env_step_begin(env);
+  for (int s = 0; s < phys_steps_[env]; ++s) physics_step(env, s == latency_[env]);
+  env_step_end(env);
+}
+
+// The parts of an env-step before and after its physics steps (the batched path, world_batch.cpp,
+// runs the same two around its lockstep physics steps).
+void World::env_step_begin(int env) {
   const int n = phys_steps_[env];
-  const int lat = latency_[env];
   for (int r = 0; r < robots_per_env_; ++r) crashed_[index(env, r)] = 0;  // per env-step flag
   if (cfg_.task.setpoint_speed_m_s > 0 && cfg_.task.kind == TaskKind::position_setpoint &&
       cfg_.controller.kind == ControllerKind::lee_position) {
@@ -583,7 +716,9 @@ void World::env_step(int env) {
       for (int k = 0; k < 3; ++k) a[k] = setpoint_w_[i][k];
     }
   }
-  for (int s = 0; s < n; ++s) physics_step(env, s == lat);
+}
+
+void World::env_step_end(int env) {
   EnvStats& es = stats_[env];
   ++es.env_steps;
   if (env < trace_envs_) {
@@ -621,6 +756,7 @@ void World::env_step(int env) {
       return;
     }
   }
+  if (height_points_ > 0) update_measured_heights(env);
   if (any_ray_sensor_) render_ray_sensors(env, false);
 }
 
@@ -629,7 +765,9 @@ void World::run_slice(int worker) {
   const int begin = static_cast<int>(static_cast<long long>(num_envs_) * worker / t);
   const int end = static_cast<int>(static_cast<long long>(num_envs_) * (worker + 1) / t);
   for (int s = 0; s < pending_steps_; ++s) {
-    for (int env = begin; env < end; ++env) env_step(env);
+    // Batched twin (world_batch.cpp): whole groups of batch::kLanes environments, bit-identical.
+    int env = batch_ ? env_steps_batched(begin, end) : begin;
+    for (; env < end; ++env) env_step(env);
   }
 }
 
@@ -702,6 +840,8 @@ std::uint64_t World::state_hash() const {
       f.pod(crashed_[i]);
     }
     for (int k = 0; k < num_obstacles_[env]; ++k) f.v3(obstacle(env, k).shape.position_w);
+    if (obstacles_rotate_)  // (absent otherwise, so hashes of worlds without rotation are unchanged)
+      for (int k = 0; k < num_obstacles_[env]; ++k) f.bytes(obstacle(env, k).shape.orientation_wb.coeffs().data(), sizeof(real) * 4);
     // Sensor outputs (absent without sensors, so sensor-free hashes are unchanged).
     for (const SensorSlot& sl : sensors_) {
       for (int r = 0; r < robots_per_env_; ++r) {
@@ -795,7 +935,10 @@ void World::update_scene(int env) {
   // microseconds for tens of obstacles, far below one image.
   sensors::Scene& sc = scenes_[static_cast<std::size_t>(env)];
   sc.clear();
-  if (cfg_.env.create_ground_plane) {
+  if (terrain_->type() != TerrainType::plane) {
+    // The terrain takes the ground plane's slot (segmentation 0, as the ground).
+    (void)sc.add(terrain_->scene_shape(), terrain_->scene_position_w(), Quat::Identity(), 0);
+  } else if (cfg_.env.create_ground_plane) {
     const real gz = lower_w_[env][2] < 0 ? lower_w_[env][2] : 0_r;  // the plane collide_robots uses
     (void)sc.add(sensors::Shape::plane(), Vec3(0, 0, gz), Quat::Identity(), 0);
   }
@@ -810,8 +953,13 @@ void World::update_scene(int env) {
       case ShapeType::capsule: rs = sensors::Shape::capsule(s.radius_m, s.half_length_m); break;
       case ShapeType::cylinder: rs = sensors::Shape::cylinder(s.radius_m, s.half_length_m); break;
       case ShapeType::convex_hull: {
-        // Mesh obstacles render as the box of their hull's body-frame bounds (no triangle mesh is
-        // kept for the hull; a box needs no extra set-up storage).
+        // Mesh obstacles render as their triangles (the file's surface; they collide as its
+        // convex hull); a hull without a mesh as the box of its body-frame bounds.
+        const std::size_t ci = o.class_index;
+        if (ci < render_meshes_.size() && render_meshes_[ci]) {
+          rs = sensors::Shape::triangle_mesh(&render_meshes_[ci]->mesh);
+          break;
+        }
         Vec3 mn = Vec3::Constant(1e30_r), mx = Vec3::Constant(-1e30_r);
         for (int v = 0; v < s.num_vertices; ++v) {
           mn = mn.cwiseMin(s.vertices[v]);
@@ -851,6 +999,22 @@ void World::render_ray_sensors(int env, bool all) {
 }
 
 void World::render_sensors(int env) {
+  if (any_ray_sensor_) render_ray_sensors(env, true);
+}
+
+void World::obstacles_changed(int env) {
+  Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
+  const int n = num_obstacles_[env];
+  for (int i = 0; i < n; ++i) shape_aabb(o[i].shape, o[i].aabb_min_w, o[i].aabb_max_w);
+  for (int i = 1; i < n; ++i) {  // insertion sort, as generate_layout (stable, no buffer)
+    Obstacle key = o[i];
+    int j = i - 1;
+    while (j >= 0 && o[j].aabb_min_w[0] > key.aabb_min_w[0]) {
+      o[j + 1] = o[j];
+      --j;
+    }
+    o[j + 1] = key;
+  }
   if (any_ray_sensor_) render_ray_sensors(env, true);
 }
 
@@ -901,6 +1065,7 @@ std::size_t World::bytes_per_env() const {
                                                   (sizeof(sensors::SceneObject) + 2 * sizeof(std::uint32_t) + sizeof(sensors::Aabb)) +
                                                   sensors::bvh_node_capacity(scene_capacity_) * sizeof(sensors::BvhNode)
                                             : 0;
+  sensor_per_robot += static_cast<std::size_t>(height_points_) * sizeof(real);  // measured_heights
   return per_env + scene + (per_robot + sensor_per_robot) * static_cast<std::size_t>(robots_per_env_);
 }
 

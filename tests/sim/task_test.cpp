@@ -171,7 +171,9 @@ TEST(SimTask, ShapesAndFirstObservation) {
 }
 
 TEST(SimTask, NoHeapInsideStep) {
-  auto t = build(task_config(16, 5));
+  WorldConfig c = task_config(16, 5);
+  c.task.episode_len_env_steps = 8;  // truncations and their resets inside the counted steps
+  auto t = build(c);
   ASSERT_TRUE(t);
   std::vector<float> a(16 * 4, 0.0f);
   t->step(a.data());  // warm-up
@@ -244,6 +246,67 @@ TEST(SimTask, RewardRisesUnderScriptedPolicyNotUnderZeroActions) {
   EXPECT_GT(s_end, s_start + 10.0) << "scripted: " << s_start << " -> " << s_end;
   EXPECT_LT(z_end, z_start + 0.5) << "zero actions: " << z_start << " -> " << z_end;
   EXPECT_GT(s_end, z_end + 10.0);
+  EXPECT_EQ(scripted->infos().terminations, 0u);
+}
+
+// The "reward falls under zero actions". Under lee_position_control a zero action is a
+// zero offset ("hold here"), so the reward above stays flat. What a zero action means depends on
+// the controller configuration, as in Aerial Gym:
+//  - direct_motor_control (Aerial Gym's motor-command configurations, controller "no_control",
+//    action = motor thrusts): zero = motors off; the robot falls, hits the floor (crash, -20,
+//    auto-reset) and falls again, so the reward falls;
+//  - lee_attitude_control (the shipped position_setpoint_task_config): zero = hover thrust
+//    (fz = (0 + 1) m |g|), level, zero yaw rate, with no position feedback: from a still start it
+//    holds where it is and the reward stays flat, while the task's scripted attitude controller
+//    raises it.
+static WorldConfig with_controller(WorldConfig c, const char* controller) {
+  EXPECT_TRUE(registries().controllers.make(controller, c.controller));
+  return c;
+}
+
+TEST(SimTask, RewardFallsUnderZeroMotorCommands) {
+  auto t = build(with_controller(task_config(32, 11), "direct_motor_control"));
+  ASSERT_TRUE(t);
+  std::vector<double> z0(32);
+  for (int e = 0; e < 32; ++e) z0[static_cast<std::size_t>(e)] = static_cast<double>(t->world().robot_state(e, 0).position_w[2]);
+  std::vector<float> scripted(32 * 4);
+  EXPECT_FALSE(t->scripted_actions(scripted.data())) << "no scripted controller for motor commands";
+  const std::vector<double> r = reward_curve(*t, false, 20);
+  // 0.2 s of free fall from rest: every robot has dropped ~0.196 m (none has reached the floor:
+  // starts are >= 0.5 m up, contact at 0.2 m).
+  for (int e = 0; e < 32; ++e)
+    EXPECT_LT(static_cast<double>(t->world().robot_state(e, 0).position_w[2]), z0[static_cast<std::size_t>(e)] - 0.15) << e;
+  const std::vector<double> rest = reward_curve(*t, false, 180);
+  std::vector<double> all = r;
+  all.insert(all.end(), rest.begin(), rest.end());
+  const double first = mean(all, 0, 50), last = mean(all, 150, 200);
+  std::printf("direct motor commands, zero actions: mean reward first quarter %.4f -> last quarter %.4f, %llu crashes\n", first,
+              last, static_cast<unsigned long long>(t->infos().crashes));
+  EXPECT_LT(last, first - 0.1) << first << " -> " << last;
+  EXPECT_GT(t->infos().crashes, 32u) << "every robot reaches the floor, most more than once";
+}
+
+TEST(SimTask, ShippedAttitudeConfigScriptedRisesZeroHovers) {
+  auto scripted = build(with_controller(task_config(32, 12), "lee_attitude_control"));
+  auto zero = build(with_controller(task_config(32, 12), "lee_attitude_control"));
+  ASSERT_TRUE(scripted && zero);
+  const std::vector<double> rz = reward_curve(*zero, false, 400);
+  std::vector<double> rs;
+  std::vector<float> a(32 * 4);
+  for (int s = 0; s < 400; ++s) {
+    ASSERT_TRUE(scripted->scripted_actions(a.data()));
+    scripted->step(a.data());
+    double m = 0;
+    for (int e = 0; e < 32; ++e) m += scripted->rewards()[e];
+    rs.push_back(m / 32);
+  }
+  const double s_first = mean(rs, 0, 100), s_last = mean(rs, 300, 400);
+  const double z_first = mean(rz, 0, 100), z_last = mean(rz, 300, 400);
+  std::printf("lee_attitude_control: scripted %.4f -> %.4f, zero actions %.4f -> %.4f (first -> last quarter)\n", s_first,
+              s_last, z_first, z_last);
+  EXPECT_GT(s_last, s_first + 10.0);
+  EXPECT_NEAR(z_last, z_first, 0.01) << "hover thrust, level: the robot stays where it started";
+  EXPECT_EQ(zero->infos().terminations, 0u);
   EXPECT_EQ(scripted->infos().terminations, 0u);
 }
 

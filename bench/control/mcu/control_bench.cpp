@@ -1,9 +1,11 @@
 // Deterministic MCU benchmark of the control stack: instructions per call of every controller,
-// allocator and the motor model, and of the whole cascade, plus the painted-stack depth of each.
+// allocator and the motor model, of the whole cascade and of the 8x8 ToF scan, plus the
+// painted-stack depth of each.
 //
 // Method: under `qemu -icount shift=0,sleep=off` every guest instruction is 1 ns of virtual time
-// and SysTick (25 MHz core clock) ticks every 40 instructions (kestrel/platform/board.hpp), so a
-// tick count is an instruction count with 40-instruction resolution. Each function runs `calls`
+// and SysTick counts the core clock (kestrel/platform/board.hpp: 40 instructions per tick on the
+// 25 MHz MPS2 boards, 125 per 21 ticks on the 168 MHz netduinoplus2), so a tick count is an
+// instruction count with one tick's resolution. Each function runs `calls`
 // times in one timed region that starts on a SysTick edge (sync_to_tick), which removes the
 // phase of the 40-instruction tick from the measurement; an empty loop of the same length is
 // subtracted. Each measurement is taken twice, from the same restored state, and must agree to
@@ -30,6 +32,7 @@
 #include "kestrel/kestrel.h"
 #include "kestrel/platform/board.hpp"
 #include "kestrel/platform/console.hpp"
+#include "kestrel/sensors/ray_sensor.hpp"
 
 namespace board = kestrel::platform::board;
 namespace al = kestrel::allocation;
@@ -61,6 +64,11 @@ RigidBodyState g_body, g_body_saved;
 kestrel_storage g_capi, g_capi_saved;
 volatile std::uint32_t g_sink;
 int g_failures = 0;
+
+// The ToF scene of tests/sensors/test_sensor_tof.cpp: floor plane, box wall, capsule post, sphere.
+kestrel::sensors::SceneStorage<8> g_tof_storage;
+real g_tof_dirs[3 * 64], g_tof_scale[64], g_tof_range[64];
+std::int32_t g_tof_seg[64];
 
 Quad g_saved_quad, g_saved_hexa;  // state restored before every timed pass
 ControllerState g_saved_ctrl[kNumControllerKinds];
@@ -114,8 +122,8 @@ __attribute__((noinline)) std::uint32_t stack_bytes(F& f) {
 }
 
 void print_row(const char* function, const char* airframe, std::uint64_t net_ticks, int calls, std::uint32_t stack) {
-  // instructions per call with one decimal: ticks * 40 / calls, exact integer arithmetic.
-  const std::uint64_t tenths = board::ticks_to_instructions(net_ticks) * 10u / static_cast<std::uint64_t>(calls);
+  // instructions per call with one decimal: ticks * 1e9 / core clock / calls, integer arithmetic.
+  const std::uint64_t tenths = board::ticks_to_instructions(net_ticks, 10u) / static_cast<std::uint64_t>(calls);
   print(function);
   print(",");
   print(airframe);
@@ -307,6 +315,34 @@ int main() {
   static kestrel_output cout;
   bench("kestrel_step_capi", "base_quadrotor", kCalls,
         [&cs, &csp] { g_sink = static_cast<std::uint32_t>(kestrel_step(&g_capi, &cs, &csp, 0.002f, &cout)); });
+  // The 8x8 multizone ToF (VL53L5CX preset, 64 rays) against the 4-object scene of
+  // tests/sensors/test_sensor_tof.cpp (its zones are checked there against analytic answers).
+  {
+    namespace se = kestrel::sensors;
+    static se::Scene scene(g_tof_storage);
+    const Quat id = Quat::Identity();
+    bool tof_ok = scene.add(se::Shape::plane(), Vec3(0, 0, -0.6_r), id, 1) == Status::ok;
+    tof_ok = tof_ok && scene.add(se::Shape::box(0.1_r, 2, 2), Vec3(2.1_r, 0, 0), id, 2) == Status::ok;
+    tof_ok = tof_ok && scene.add(se::Shape::capsule(0.1_r, 0.5_r), Vec3(1, 0.3_r, 0), id, 3) == Status::ok;
+    tof_ok = tof_ok && scene.add(se::Shape::sphere(0.15_r), Vec3(1.5_r, -0.4_r, 0.3_r), id, 4) == Status::ok;
+    tof_ok = tof_ok && scene.build() == Status::ok;
+    static const se::LidarParams tof = se::lidar_preset_vl53l5cx();
+    static se::RayTable table{g_tof_dirs, g_tof_scale, 64, 0, 0};
+    tof_ok = tof_ok && se::lidar_rays(tof, table) == Status::ok;
+    static se::SensorPose pose;  // at the origin, looking along +x
+    static se::SensorOutput out;
+    out.range = g_tof_range;
+    out.segmentation = g_tof_seg;
+    tof_ok = tof_ok && se::render(scene, pose, table, tof.range, false, out) == Status::ok;
+    int hits = 0;
+    for (int i = 0; i < 64; ++i) hits += g_tof_seg[i] >= 0 ? 1 : 0;
+    if (!tof_ok || hits == 0) {
+      println("control bench: ToF scene setup failed");
+      return 1;
+    }
+    bench("tof_scan_vl53l5cx_8x8", "scene_4_objects", 10,
+          [] { g_sink = static_cast<std::uint32_t>(se::render(scene, pose, table, tof.range, false, out)); });
+  }
   // The plant the firmware example closes the loop with (not part of the control stack).
   const Wrench hover_w = Wrench::from_vec6(hover_q);
   bench("step_rigid_body_rk4", "base_quadrotor", kCalls,

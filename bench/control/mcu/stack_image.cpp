@@ -3,9 +3,14 @@
 // vector table and runtime):
 //   KESTREL_STACK_EMPTY    main() only;
 //   KESTREL_STACK_CASCADE  Lee position -> sequential desaturation -> motor model of the quad,
-//                          built at start-up (pseudo-inverse included), stepped from volatile
-//                          inputs: the control stack of the firmware example without its plant
-//                          and printing;
+//                          built at start-up (airframe, pseudo-inverse and presets included),
+//                          stepped from volatile inputs: the control stack of the firmware
+//                          example without its plant and printing. Static RAM holds what
+//                          persists between steps (parameters, allocation model, stage states);
+//                          set-up-only data and per-step outputs are on the stack.
+//                          Built twice: with the default rotor capacity (kestrel_stack_cascade)
+//                          and with the allocation library at KESTREL_MAX_ROTORS=4
+//                          (kestrel_stack_cascade_quad), as a quadrotor's firmware would build it;
 //   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable).
 // Nothing is printed: the console and its number formatting would count as control stack.
 #include <cstdint>
@@ -17,6 +22,8 @@
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/lee.hpp"
+#endif
+#if defined(KESTREL_STACK_CAPI)
 #include "kestrel/kestrel.h"
 #endif
 
@@ -29,44 +36,57 @@ volatile std::uint32_t g_steps = 3;
 #if defined(KESTREL_STACK_CASCADE)
 namespace {
 namespace al = kestrel::allocation;
+using kestrel::real;
+// What a flight controller keeps between steps: parameters, the allocation model (rebuilt when a
+// motor fails) and the state of each stage. The airframe description is needed only to build
+// the model and the per-step allocation result is an output, so both live on the stack.
 struct Stack {
   kestrel::LeeParams lee;
   kestrel::LeeState lee_state;
   al::AllocationModel model;
   al::AllocatorState alloc_state;
   al::SequentialDesaturationParams desat;
-  al::AllocationResult alloc_out;
   al::MotorModelState motors;
 };
 Stack g_stack;
-al::Airframe g_airframe;  // only needed to build the model
-}  // namespace
 
-int main() {
+// One control step, the entry point of bench/control/stack_usage.py's static stack bound.
+__attribute__((noinline)) void cascade_step(Stack& s, const real (&in)[13], bool first) {
   using namespace kestrel;
-  Stack& s = g_stack;
+  RigidBodyState b;
+  b.position_w = Vec3(in[0], in[1], in[2]);
+  b.linvel_w = Vec3(in[3], in[4], in[5]);
+  b.orientation_wb = Quat(in[9], in[6], in[7], in[8]);
+  if (first) b.orientation_wb = Quat::Identity();
+  b.angvel_b = Vec3(in[10], in[11], in[12]);
+  const real cmd[4] = {0, 0, 1, 0};
+  const Wrench w = update_lee_position(s.lee, s.lee_state, b, cmd);
+  al::AllocationResult alloc_out;
+  (void)al::allocate_sequential_desaturation(s.model, s.desat, s.alloc_state, w, alloc_out);
+  (void)al::motor_model_step(al::kBaseQuadrotorMotors, s.motors, alloc_out.thrust_N, 0.002_r);
+  for (int i = 0; i < 4; ++i) g_out[i] = s.motors.thrust_N[i];
+}
+
+__attribute__((noinline)) bool setup(Stack& s) {
+  using namespace kestrel;
   s.lee = lee_params_base_quadrotor();
   lee_reset(s.lee, s.lee_state);
-  if (al::make_airframe(al::kBaseQuadrotor, g_airframe) != Status::ok) return 1;
-  if (al::build_allocation_model(g_airframe, s.model) == Status::invalid_argument) return 1;
+  al::Airframe airframe;
+  if (al::make_airframe(al::kBaseQuadrotor, airframe) != Status::ok) return false;
+  if (al::build_allocation_model(airframe, s.model) == Status::invalid_argument) return false;
   al::reset_allocator(s.alloc_state);
   RngStream rng(1, 0, kPurposeMotors);
   const real idle[al::kMaxRotors] = {};
-  if (al::motor_model_reset(al::kBaseQuadrotorMotors, s.motors, rng, idle) != Status::ok) return 1;
+  return al::motor_model_reset(al::kBaseQuadrotorMotors, s.motors, rng, idle) == Status::ok;
+}
+}  // namespace
+
+int main() {
+  if (!setup(g_stack)) return 1;
   for (std::uint32_t k = 0; k < g_steps; ++k) {
     real in[13];
     for (int i = 0; i < 13; ++i) in[i] = g_in[i];
-    RigidBodyState b;
-    b.position_w = Vec3(in[0], in[1], in[2]);
-    b.linvel_w = Vec3(in[3], in[4], in[5]);
-    b.orientation_wb = Quat(in[9], in[6], in[7], in[8]);
-    if (k == 0) b.orientation_wb = Quat::Identity();
-    b.angvel_b = Vec3(in[10], in[11], in[12]);
-    const real cmd[4] = {0, 0, 1, 0};
-    const Wrench w = update_lee_position(s.lee, s.lee_state, b, cmd);
-    (void)al::allocate_sequential_desaturation(s.model, s.desat, s.alloc_state, w, s.alloc_out);
-    (void)al::motor_model_step(al::kBaseQuadrotorMotors, s.motors, s.alloc_out.thrust_N, 0.002_r);
-    for (int i = 0; i < 4; ++i) g_out[i] = s.motors.thrust_N[i];
+    cascade_step(g_stack, in, k == 0);
   }
   return 0;
 }

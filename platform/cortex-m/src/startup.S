@@ -1,4 +1,5 @@
-/* Cortex-M3/M4/M7 startup for the Arm MPS2 boards: vector table, reset handler, fault entry.
+/* Cortex-M3/M4/M7 startup for the Arm MPS2 boards and the STM32F405 (netduinoplus2): vector table,
+ * reset handler, fault entry.
  *
  * Written in assembly so that nothing runs before the FPU is enabled (with -mfloat-abi=hard the
  * compiler may use FP registers in any C++ function, even a copy loop) and so the vector table is a
@@ -14,7 +15,8 @@
     .equ KESTREL_STACK_PAINT, 0x5AC3C35A   /* stack high-water mark (board::stack_used_bytes) */
 
 /* ---------------------------------------------------------------------------------------------
- * Vector table: 16 system exceptions + 32 external interrupts (QEMU's MPS2 NVIC has num-irq 32).
+ * Vector table: 16 system exceptions + 32 external interrupts (QEMU's MPS2 NVIC has num-irq 32;
+ * the STM32F405 has more, none of which the images enable).
  */
     .section .isr_vector,"a",%progbits
     .align 2

@@ -26,10 +26,17 @@
 namespace kestrel::allocation {
 
 /// Compile-time rotor capacity. Every per-rotor array in the allocation layer has this size and
-/// loops run to the runtime rotor count only. 12 covers quad/hexa/octa/dodeca frames and the
-/// 8-thruster ROV; saturation masks are 16-bit.
-constexpr int kMaxRotors = 12;
-static_assert(kMaxRotors <= 16, "saturation masks are std::uint16_t");
+/// loops run to the runtime rotor count only. 12 (the default) covers quad/hexa/octa/dodeca
+/// frames and the 8-thruster ROV; saturation masks are 16-bit. A firmware for one frame may build
+/// the allocation library with a smaller capacity (-DKESTREL_MAX_ROTORS=4 on the library and
+/// everything that includes its headers, as a PUBLIC definition: the struct layouts depend on it)
+/// to shrink every per-rotor array; presets with more rotors are then empty (num_rotors 0, which
+/// make_airframe rejects) and results are bit-identical to the default build's.
+#if !defined(KESTREL_MAX_ROTORS)
+#define KESTREL_MAX_ROTORS 12
+#endif
+constexpr int kMaxRotors = KESTREL_MAX_ROTORS;
+static_assert(kMaxRotors >= 1 && kMaxRotors <= 16, "KESTREL_MAX_ROTORS: 1..16 (saturation masks are std::uint16_t)");
 
 /// A: (6 x kMaxRotors), rows [fx, fy, fz, tx, ty, tz]; columns >= num_rotors are zero.
 using EffectivenessMatrix = Mat<6, kMaxRotors>;

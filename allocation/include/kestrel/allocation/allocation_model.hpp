@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 
 #include "kestrel/allocation/airframe.hpp"
 #include "kestrel/allocation/pinv.hpp"
@@ -25,9 +26,14 @@ namespace kestrel::allocation {
 
 /// Per-motor health: thrust_scale 1 healthy, 0 dead, in between weak (limits scaled).
 struct MotorHealth {
-  real thrust_scale[kMaxRotors] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  real thrust_scale[kMaxRotors];
+  constexpr MotorHealth() : MotorHealth(std::make_integer_sequence<int, kMaxRotors>()) {}
+
+ private:
+  // {1, 1, ..., 1} for any KESTREL_MAX_ROTORS, as one array initialiser (constant data, no loop).
+  template <int... kI>
+  constexpr explicit MotorHealth(std::integer_sequence<int, kI...>) : thrust_scale{((void)kI, real(1))...} {}
 };
-static_assert(kMaxRotors == 12, "update MotorHealth's initialiser with kMaxRotors");
 
 /// Read-only allocation data derived from an airframe and the motor health.
 struct AllocationModel {

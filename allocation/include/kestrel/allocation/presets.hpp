@@ -46,6 +46,14 @@ namespace presets {
 
 constexpr RotorSpec flat_rotor(real x_m, real y_m) { return RotorSpec{{x_m, y_m, 0}, {0, 0, 1}}; }
 
+/// A preset with more rotors than a reduced KESTREL_MAX_ROTORS (airframe.hpp) holds: named, but
+/// empty (num_rotors 0), so make_airframe rejects it with invalid_argument.
+constexpr AirframeSpec unavailable(const char* name) {
+  AirframeSpec s{};
+  s.name = name;
+  return s;
+}
+
 constexpr AirframeSpec base_quadrotor() {
   AirframeSpec s{};
   s.name = "base_quadrotor";
@@ -65,6 +73,7 @@ constexpr AirframeSpec base_quadrotor() {
 }
 
 constexpr AirframeSpec base_random() {
+  if (kMaxRotors < 8) return unavailable("base_random");
   AirframeSpec s{};
   s.name = "base_random";
   s.num_rotors = 8;
@@ -93,6 +102,7 @@ constexpr AirframeSpec base_random() {
 }
 
 constexpr AirframeSpec base_octarotor(const char* name = "base_octarotor") {
+  if (kMaxRotors < 8) return unavailable(name);
   AirframeSpec s{};
   s.name = name;
   s.num_rotors = 8;
@@ -121,6 +131,7 @@ constexpr AirframeSpec base_octarotor(const char* name = "base_octarotor") {
 }
 
 constexpr AirframeSpec hexarotor() {
+  if (kMaxRotors < 6) return unavailable("hexarotor");
   AirframeSpec s{};
   s.name = "hexarotor";
   s.num_rotors = 6;

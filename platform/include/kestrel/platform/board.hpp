@@ -1,13 +1,16 @@
-// Board API of the Cortex-M ports (Arm MPS2 AN385 / AN386 / AN500 under QEMU): core clock,
-// SysTick timing, console flush, stack use, exit. MCU builds only (KESTREL_PLATFORM_CORTEX_M).
+// Board API of the Cortex-M ports (Arm MPS2 AN385 / AN386 / AN500 and the STM32F405 of QEMU's
+// netduinoplus2): core clock, SysTick timing, console flush, stack use, exit. MCU builds only
+// (KESTREL_PLATFORM_CORTEX_M).
 //
 // Timing under QEMU: run with `-icount shift=0,sleep=off` (run-qemu.sh does) and every guest
 // instruction advances virtual time by exactly 1 ns (sleep=off: an idle core, WFI, jumps to the
-// next timer deadline instead of waiting in host time, which would make results vary). SysTick counts the 25 MHz core clock, i.e. one tick per
-// 40 ns = 40 instructions, so tick counts are deterministic instruction counts with a resolution
-// of 40 instructions (ticks_to_instructions). Measured, not assumed: see
-// platform/cortex-m/tests/test_systick_calibration.cpp. Without -icount the ticks follow host
-// wall-clock time and mean nothing.
+// next timer deadline instead of waiting in host time, which would make results vary). SysTick
+// counts the core clock (kCoreClockHz, set per board by the build), so a tick count is an
+// instruction count: ticks * 1e9 / kCoreClockHz (ticks_to_instructions). MPS2 boards: 25 MHz, one
+// tick = exactly 40 instructions. netduinoplus2 (STM32F405): 168 MHz, one tick = 125/21 = 5.95
+// instructions, so 21 ticks are exactly 125 instructions and a region is exact to +-1 tick (6
+// instructions). Measured, not assumed: platform/cortex-m/tests/test_board.cpp. Without -icount
+// the ticks follow host wall-clock time and mean nothing.
 #pragma once
 
 #include <cstddef>
@@ -15,7 +18,8 @@
 
 namespace kestrel::platform::board {
 
-/// The board and CPU this image is built for ("mps2-an386", "Cortex-M4F"; from the build).
+/// The board and CPU this image is built for ("mps2-an386", "Cortex-M4F"; from the build,
+/// platform/cortex-m/CMakeLists.txt).
 inline constexpr const char* kBoardName = KESTREL_BOARD_NAME;
 inline constexpr const char* kCpuName = KESTREL_BOARD_CPU;
 /// Floating-point hardware: single precision (M4F, M7), double precision too (M7). Without an FPU
@@ -28,12 +32,21 @@ inline constexpr bool kHasFpu = false;
 inline constexpr bool kHasDoubleFpu = false;
 #endif
 
-/// MPS2 FPGA images clock the core (and SysTick with CLKSOURCE = processor clock) at 25 MHz.
+/// Core clock (and SysTick's, with CLKSOURCE = processor clock) as QEMU models the board: the
+/// MPS2 FPGA images run at 25 MHz, the netduinoplus2's STM32F405 at 168 MHz.
+#if defined(KESTREL_BOARD_CORE_CLOCK_HZ)
+inline constexpr std::uint32_t kCoreClockHz = KESTREL_BOARD_CORE_CLOCK_HZ;
+#else
 inline constexpr std::uint32_t kCoreClockHz = 25'000'000;
+#endif
 /// SysTick's reload register is 24 bits wide.
 inline constexpr std::uint32_t kSysTickMaxReload = 0x00FF'FFFF;
-/// Guest instructions per SysTick tick under `qemu -icount shift=0` (1 instruction = 1 ns).
-inline constexpr std::uint32_t kIcountInstructionsPerTick = 1'000'000'000u / kCoreClockHz;
+/// Guest instructions (= ns of virtual time) per second under `qemu -icount shift=0`.
+inline constexpr std::uint64_t kIcountInstructionsPerSecond = 1'000'000'000u;
+/// Guest instructions per SysTick tick under `qemu -icount shift=0`: 40 on the MPS2 boards,
+/// 5.952... on the netduinoplus2 (not an integer: use ticks_to_instructions for exact counts).
+inline constexpr double kIcountInstructionsPerTick =
+    static_cast<double>(kIcountInstructionsPerSecond) / static_cast<double>(kCoreClockHz);
 
 using TickCallback = void (*)();
 
@@ -71,10 +84,18 @@ std::uint64_t measure_ticks(F&& f) {
   return systick_now() - t0;
 }
 
-/// Guest instructions for an elapsed tick count under `-icount shift=0`.
-constexpr std::uint64_t ticks_to_instructions(std::uint64_t ticks) { return ticks * kIcountInstructionsPerTick; }
-/// Nanoseconds of core time for an elapsed tick count.
-constexpr std::uint64_t ticks_to_ns(std::uint64_t ticks) { return ticks * (1'000'000'000u / kCoreClockHz); }
+/// Guest instructions for an elapsed tick count under `-icount shift=0`, rounded to the nearest
+/// (exact on the MPS2 boards: ticks * 40; netduinoplus2: ticks * 125 / 21). `scale` multiplies
+/// the result before rounding (e.g. 10 for tenths of an instruction per call).
+constexpr std::uint64_t ticks_to_instructions(std::uint64_t ticks, std::uint64_t scale = 1) {
+  return (ticks * kIcountInstructionsPerSecond * scale + kCoreClockHz / 2u) / kCoreClockHz;
+}
+/// SysTick ticks that `instructions` guest instructions take under `-icount shift=0` (rounded down).
+constexpr std::uint64_t instructions_to_ticks(std::uint64_t instructions) {
+  return instructions * kCoreClockHz / kIcountInstructionsPerSecond;
+}
+/// Nanoseconds of core time for an elapsed tick count (rounded to the nearest).
+constexpr std::uint64_t ticks_to_ns(std::uint64_t ticks) { return ticks_to_instructions(ticks); }
 
 /// Flushes the buffered semihosting console (console_write flushes at each newline by itself).
 void console_flush();

@@ -59,7 +59,43 @@ struct AssetClass {
   bool keep_in_env = false;      // true: the curriculum never removes it
   int semantic_id = 1;
   real max_speed_m_s = 0;        // dynamic environment: velocity drawn per reset in +-max
+  real max_angular_speed_rad_s = 0;  // dynamic environment: world-frame angular velocity per reset in +-max
   std::string mesh_file;         // AssetKind::mesh: .obj/.stl loaded at World::create (size unused)
+};
+
+/// Terrain: the ground of every environment of a world (legged_gym's cfg.terrain; see
+/// sim/terrain.hpp for the generators, the contact model and measured_heights).
+///  plane:       the ground plane (create_ground_plane), as without terrain;
+///  heightfield: a grid of heights from `heights_m` (YAML list), an image (PGM/PNG, pixel value x
+///               vertical_scale_m) or a procedural generator; it replaces the ground plane;
+///  trimesh:     triangles of an OBJ/STL file (outward = right-hand winding); replaces the plane.
+enum class TerrainType : std::uint8_t { plane = 0, heightfield, trimesh };
+struct TerrainConfig {
+  TerrainType type = TerrainType::plane;
+  std::string source_file;          // scenario file the terrain came from (error messages)
+  // Heightfield grid: nx samples along x, ny along y, spacing horizontal_scale_m (legged_gym's
+  // horizontal_scale). origin_m: world x-y of the grid centre and a z offset added to every height
+  // (trimesh: a translation added to every vertex).
+  real horizontal_scale_m = 0.1_r;
+  real vertical_scale_m = 0.005_r;  // image pixel value -> metres (legged_gym's vertical_scale)
+  Vec3 origin_m = Vec3::Zero();
+  int nx = 0, ny = 0;
+  std::vector<real> heights_m;      // (ny x nx), row j = y index j, from the YAML list
+  std::string image_file;           // .pgm / .png heightmap (row 0 = largest y)
+  std::string procedural;           // flat, slope, pyramid_slope, stairs, pyramid_stairs, random_uniform, wave
+  real length_x_m = 8, width_y_m = 8;  // procedural grid size
+  real slope = 0.2_r;               // slope, pyramid_slope: rise per metre (negative: down)
+  real platform_size_m = 1;         // pyramid_*: flat top of this width
+  real step_width_m = 0.3_r, step_height_m = 0.1_r;  // stairs, pyramid_stairs
+  real min_height_m = -0.05_r, max_height_m = 0.05_r, height_step_m = 0.005_r, downsampled_scale_m = 0.2_r;  // random_uniform
+  int num_waves = 2;                // wave
+  real amplitude_m = 0.2_r;         // wave
+  std::string mesh_file;            // trimesh
+  // measured_heights (legged_gym): heights sampled at these body-yaw-frame offsets around each robot.
+  bool measure_heights = false;
+  std::vector<real> measured_points_x_m = {-0.8_r, -0.7_r, -0.6_r, -0.5_r, -0.4_r, -0.3_r, -0.2_r, -0.1_r, 0,
+                                           0.1_r,  0.2_r,  0.3_r,  0.4_r,  0.5_r,  0.6_r,  0.7_r,  0.8_r};
+  std::vector<real> measured_points_y_m = {-0.5_r, -0.4_r, -0.3_r, -0.2_r, -0.1_r, 0, 0.1_r, 0.2_r, 0.3_r, 0.4_r, 0.5_r};
 };
 
 /// Environment config (Aerial Gym env config fields).
@@ -89,6 +125,7 @@ struct EnvConfig {
   Vec3 max_torque_disturbance_Nm = Vec3(0.004_r, 0.004_r, 0.004_r);
   real curriculum_level = 1;   // 0..1: obstacle count between min_num_assets and num_assets
   std::vector<AssetClass> assets;   // include_asset_type: the classes present
+  TerrainConfig terrain;            // `terrain:` (default: the ground plane)
 };
 
 /// One sensor attached to the robot (sensors registry entry; Aerial Gym's robot config
@@ -118,6 +155,11 @@ struct RobotConfig {
   Vec3 angular_drag_b = Vec3::Zero();
   Vec3 quadratic_angular_drag_b = Vec3::Zero();
   ShapeSpec shape;  // default: sphere of 0.2 m radius around the base quadrotor
+  // Rotor geometry read from a URDF (sim/urdf.hpp). Non-empty: replaces the airframe preset's
+  // rotors (count, hub positions, thrust axes, spin directions); the thrust limits, reaction-torque
+  // ratio and motor model constants stay the preset's.
+  std::vector<allocation::RotorSpec> rotors;
+  std::vector<std::int8_t> rotor_directions;  // +1 / -1 per rotor (see airframe.hpp)
   // Start state as ratios of the env bounds (Aerial Gym robot config min/max_init_state ratios).
   Vec3 min_init_position_ratio = Vec3(0.1_r, 0.1_r, 0.1_r);
   Vec3 max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0.9_r);
@@ -160,6 +202,30 @@ struct TaskConfig {
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env
 
+/// The physics backend behind sim/simulator.hpp and its options (scenario `simulator:`).
+/// backend: "rigid" (the 3-D World) or "planar" (Box2D); empty = the KESTREL_SIMULATOR environment
+/// variable, else rigid (resolved once, by make_simulator). The planar fields are read by the
+/// planar backend only (sim/src/planar*.cpp).
+/// automatic: ground_vehicle for the robot "ground_vehicle", multirotor for any other robot.
+enum class PlanarVehicle : std::uint8_t { automatic = 0, ground_vehicle, multirotor };
+struct SimulatorConfig {
+  std::string backend;               // "", "rigid" or "planar"
+  real max_push_vel_xy_m_s = 1;      // push_robots: v_x, v_y drawn in [-max, max] (legged_gym)
+  PlanarVehicle vehicle = PlanarVehicle::automatic;
+  real wheelbase_m = 0.33_r;         // ground vehicle (VelocitySteeringParams)
+  real max_speed_m_s = 3;
+  real max_steering_rad = 0.4_r;
+  real altitude_m = 1;               // multirotor: fixed flight height
+  int lidar_beams = 0;               // 2-D lidar: 0 = none
+  real lidar_fov_rad = 4.71238898_r; // 270 deg, centred on body x
+  real lidar_max_range_m = 10;
+  // Domain randomisation per reset (planar): uniform in [min, max].
+  real added_mass_min_kg = 0, added_mass_max_kg = 0;
+  real com_bias_max_m = 0;           // centre-of-mass offset, x and y in [-max, max] (body frame)
+  real motor_scale_min = 1, motor_scale_max = 1;  // motor/drive constant scale
+  real gain_scale_min = 1, gain_scale_max = 1;    // controller gain scale
+};
+
 /// Everything a world is built from.
 struct WorldConfig {
   SimParams sim;
@@ -167,6 +233,7 @@ struct WorldConfig {
   RobotConfig robot;
   ControllerConfig controller;
   TaskConfig task;
+  SimulatorConfig simulator;  // backend selection (sim/simulator.hpp)
   std::uint64_t seed = 0;
   int num_threads = 1;
 };

@@ -63,6 +63,7 @@ struct Registries {
   Registry<ControllerConfig> controllers;
   Registry<SensorConfig> sensors;
   Registry<TaskConfig> tasks;
+  Registry<SimulatorConfig> simulators;  // physics backends (sim/simulator.hpp)
 };
 
 /// The process-wide registries, with the built-ins registered on first use.

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kestrel/kernel/types.hpp"
@@ -29,10 +30,15 @@ namespace kestrel::sim {
 struct TaskInfos {
   std::uint64_t steps = 0;          // task steps taken
   std::uint64_t episodes = 0;       // episodes finished (terminated or truncated)
-  std::uint64_t terminations = 0;   // of which terminated (contact crash, out of bounds, d > 8 m)
+  std::uint64_t terminations = 0;   // of which terminated (crash, or success where the task ends on it)
   std::uint64_t truncations = 0;    // of which truncated only (episode length reached)
+  std::uint64_t crashes = 0;        // episodes ended by a crash (contact, out of bounds, task rule)
+  std::uint64_t successes = 0;      // episodes ended by reaching the goal (tasks that have one)
   double episode_reward_sum = 0;    // sum over finished episodes of the episode's summed reward
+  int curriculum_level = 0;         // obstacle curriculum level now (navigation_task)
+  std::uint64_t curriculum_changes = 0;  // times the curriculum level moved
   double mean_episode_reward() const { return episodes > 0 ? episode_reward_sum / static_cast<double>(episodes) : 0; }
+  double success_rate() const { return episodes > 0 ? static_cast<double>(successes) / static_cast<double>(episodes) : 0; }
 };
 
 class Task {
@@ -53,6 +59,10 @@ class Task {
   virtual void reset_idx(const int* env_ids, int count) = 0;
   /// One task step: `actions` is num_envs x action_dim floats (row-major).
   virtual void step(const float* actions) = 0;
+  /// The task's built-in scripted controller (what `kestrel run --policy scripted` drives):
+  /// writes num_envs x action_dim actions computed from the current observations and state.
+  /// False (nothing written) when the task has none for its controller configuration.
+  virtual bool scripted_actions(float* actions) const = 0;
 
   const float* observations() const { return obs_.data(); }
   const float* rewards() const { return rewards_.data(); }
@@ -72,11 +82,30 @@ class Task {
   TaskInfos infos_;
 };
 
-/// Builds the task named by config.task.name (registered in registries().tasks; today only
-/// "position_setpoint_task"). Returns nullptr and a message for an unknown task or a bad config.
+/// Builds the task named by config.task.name: "position_setpoint_task", "navigation_task"
+/// (navigation_task.hpp) or a custom task id (custom_task.hpp). Returns nullptr and a message
+/// (listing the task ids) for an unknown task or a bad config.
 std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error);
 /// True if config.task.name names a Task (rather than the World's built-in scripted tasks).
 bool is_rl_task(const std::string& task_name);
+/// Every id make_task accepts, sorted ("a, b, c" for messages).
+std::vector<std::string> rl_task_ids();
+std::string rl_task_ids_joined();
+
+/// Registry names a scenario (or `kestrel run --task ID`) uses for the sections it does not give,
+/// when its task is an RL task: the task's own sim, env, robot, controller and sensors.
+struct TaskDefaults {
+  std::string sim = "base_sim", env = "empty", robot = "base_quadrotor", controller = "lee_position_control";
+  std::vector<std::pair<std::string, int>> sensors;  // (sensor registry name, every_env_steps)
+};
+/// False if `task_name` is not an RL task id.
+bool task_defaults(const std::string& task_name, TaskDefaults& out);
+
+/// Min-pools a ray sensor's range image (height x width, row-major) to rows x cols cells: each
+/// cell is the smallest valid range of its pixel block (blocks split at floor(i * height / rows))
+/// divided by max_range_m and clamped to [0, 1]; pixels with no valid return (negative,
+/// non-finite, beyond max_range_m) count as max_range_m. Needs rows <= height, cols <= width.
+void min_pool_ranges(const real* ranges, int height, int width, real max_range_m, int rows, int cols, float* out);
 
 // ---- position_setpoint_task ---------------------------------------------------------------------
 
@@ -109,7 +138,11 @@ void vehicle_frame_error(const float quat_xyzw[4], const float err_world[3], flo
 ///       a setpoint relative to the robot keeps a zero action meaning "hold here" wherever the
 ///       target is, and the scripted policy "fly to the target" is simply action = obs[0:3].
 ///     - any other controller: passed through unchanged (Aerial Gym's semantics; its shipped
-///       config uses lee_attitude_control).
+///       config uses lee_attitude_control, where a zero action is hover thrust, level, zero yaw
+///       rate; with direct_motor_control, as Aerial Gym's motor-command configs, a zero action
+///       is motors off and the robot falls: sim/scenarios/position_setpoint_*.yaml).
+///   scripted_actions(): fly to the target for lee_position_control (action = obs[0:3]),
+///     lee_velocity_control and lee_attitude_control (a PD position loop); none for motor commands.
 ///   terminations: contact crash (World, force > threshold), out of bounds (World's 0.5 m margin)
 ///     or d > 8 m (the reward's crash rule); truncations: episode_len_env_steps env-steps reached
 ///     (Aerial Gym truncates at sim_steps > episode_len_steps, i.e. one step later).

@@ -34,11 +34,18 @@
 
 namespace kestrel::sim {
 
+class Terrain;
+namespace batch {
+struct Models;
+}
+struct SceneMesh;
+
 /// One obstacle slot. Obstacles of an environment are kept sorted by aabb_min_w.x (the sweep
 /// order of the broad phase); a moving obstacle may change its index after a step.
 struct Obstacle {
   Shape shape;
   Vec3 linvel_w = Vec3::Zero();   // dynamic environment: set per reset or by set_obstacle_velocity
+  Vec3 angvel_w = Vec3::Zero();   // dynamic environment: world-frame angular velocity, set per reset
   Vec3 aabb_min_w = Vec3::Zero();
   Vec3 aabb_max_w = Vec3::Zero();
   std::int16_t semantic_id = 0;
@@ -150,15 +157,60 @@ class World {
   /// Rebuilds the environment's scene from its obstacles and renders every ray sensor now
   /// (what step() does; no heap). For tests and owners that move robots or obstacles by hand.
   void render_sensors(int env);
+  /// After an owner (a Task's randomisation terms, sim/task.hpp) rewrote obstacle shapes of an
+  /// environment through obstacle(): recomputes their bounding boxes, restores the sweep order
+  /// and re-renders the ray sensors (no heap).
+  void obstacles_changed(int env);
 
   /// Worker entry (public for the thread pool's trampoline).
   void run_slice(int worker);
+
+  /// Batched twin of the robot step (sim/batch_step.hpp), on by default where the configuration
+  /// allows it and bit-identical to the scalar path. set_batched(false) forces the scalar path
+  /// (tests, bench); returns whether the batched path is in use afterwards.
+  bool set_batched(bool on);
+  bool batched() const { return batch_; }
+
+  // Terrain (config().env.terrain, sim/terrain.hpp): shared by every environment.
+  const Terrain* terrain() const { return terrain_.get(); }
+  /// measured_heights (legged_gym): world z of the terrain under each robot's height points
+  /// (measured_points_x/y rotated by the robot's yaw, x-major: point k = ix * ny + iy), updated at
+  /// every env-step end and reset. Shape (num_envs x robots_per_env x num_height_points()); 0
+  /// points unless env.terrain.measure_heights. Plane terrain: the ground plane's z (-1e30 with
+  /// create_ground_plane false); heights outside a height field: its nearest edge.
+  int num_height_points() const { return height_points_; }
+  const real* measured_heights() const { return measured_heights_.data(); }
+  const real* measured_heights(int env, int robot) const {
+    return measured_heights_.data() + index(env, robot) * static_cast<std::size_t>(height_points_);
+  }
+
+  // Used by the rigid backend of the Simulator interface (sim/simulator.hpp).
+  /// Puts an exact root state and clears the pending contact wrench and the crash flag.
+  void set_root_state(int env, int robot, const RigidBodyState& s) {
+    state_[index(env, robot)] = s;
+    contact_force_w_[index(env, robot)] = Vec3::Zero();
+    contact_torque_b_[index(env, robot)] = Vec3::Zero();
+    crashed_[index(env, robot)] = 0;
+  }
+  const Vec3& contact_torque_b(int env, int robot) const { return contact_torque_b_[index(env, robot)]; }
+  const ControllerState& controller_state(int env, int robot) const { return ctrl_state_[index(env, robot)]; }
+  const allocation::MotorModelState& motor_state(int env, int robot) const { return motors_[index(env, robot)]; }
+  const allocation::Airframe& airframe() const { return airframe_; }
+  const allocation::MotorModelConfig& motor_config() const { return motor_cfg_; }
+  const ControllerParams& controller_params() const { return ctrl_params_; }
 
  private:
   World() = default;
   std::size_t index(int env, int robot) const { return static_cast<std::size_t>(env) * robots_per_env_ + robot; }
   void env_step(int env);
+  void env_step_begin(int env);
+  void env_step_end(int env);
   void physics_step(int env, bool use_new_action);
+  void physics_step_tail(int env);
+  // Batched path (world_batch.cpp).
+  bool batch_eligible() const;
+  int env_steps_batched(int begin, int end);  // returns the first environment it left to the caller
+  void robot_dynamics_batch(int env0, unsigned new_action_mask, const batch::Models& models);
   void robot_dynamics(int env, int robot, std::size_t i, bool use_new_action);
   void move_obstacles(int env);
   void collide_robots(int env);
@@ -167,6 +219,8 @@ class World {
   bool clear_point(int env, const Vec3& p) const;
   bool clear_segment(int env, const Vec3& a, const Vec3& b) const;
   void update_scene(int env);
+  void update_measured_heights(int env);
+  real ground_height(real x_w, real y_w, int env) const;
   void render_ray_sensors(int env, bool all);
   void update_imus(int env, int robot, const Vec3& linvel_before_w);
   bool setup_sensors(std::string& error);
@@ -224,7 +278,15 @@ class World {
   std::vector<EnvStats> stats_;
 
   std::vector<Obstacle> obstacles_;  // (num_envs x obstacle_capacity)
+  bool obstacles_rotate_ = false;    // some asset class has max_angular_speed_rad_s > 0
+
+  // Terrain and measured heights (num_envs x robots x height_points_).
+  std::unique_ptr<Terrain> terrain_;
+  int height_points_ = 0;
+  std::vector<real> height_points_x_b_, height_points_y_b_;  // (height_points_) body-yaw-frame offsets
+  std::vector<real> measured_heights_;
   std::vector<std::vector<Vec3>> mesh_vertices_;  // per asset class (AssetKind::mesh), set-up only
+  std::vector<std::unique_ptr<SceneMesh>> render_meshes_;  // per asset class (AssetKind::mesh): what sensors see
 
   // Sensors: per-environment scenes over caller storage (scene_capacity_ objects each: the
   // obstacle slots plus the ground plane), the streams of placement and sensor noise.
@@ -247,6 +309,7 @@ class World {
   std::unique_ptr<ThreadPool> pool_;
   int pending_steps_ = 0;
   bool auto_reset_ = true;
+  bool batch_ = false;
 };
 
 /// Robots per asset link: a tree is a trunk and this many branches (one obstacle slot each).

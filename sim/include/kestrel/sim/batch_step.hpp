@@ -1,0 +1,87 @@
+// Batched twin of the per-robot physics step (World::robot_dynamics): controller -> allocation ->
+// motor model -> body wrench -> rigid-body integration for kLanes robots at once, one robot
+// per SIMD lane (structure of arrays in registers, gathered from and scattered back to the
+// world's per-robot storage).
+//
+// Bit-identical to the scalar path, by construction and by test (tests/sim/batch_step_test.cpp):
+// every lane performs the same IEEE operations in the same order as the scalar core functions
+// (update_lee_position, allocate_sequential_desaturation<4>, motor_model_step, wrench_from_thrusts,
+// step_rigid_body with Eigen 3.4's quaternion product / transformVector / reduction orders), and
+// SIMD add, sub, mul, div and sqrt round exactly like their scalar forms (-ffp-contract=off keeps
+// the compiler from fusing). Trigonometry stays scalar per lane (the same sin_cos / std::sin /
+// std::cos calls). The sequential desaturation of an infeasible command (airmode roll_pitch, the
+// default) runs in the lanes too, its per-lane early exits as masks. Rare paths (a non-finite or
+// out-of-range command, a singular force or heading, a desired rotation with trace <= 0, another
+// airmode, a scheduled or dead motor, a clamped motor rate, a non-finite result) are detected per
+// lane and that lane's stage is recomputed by the scalar core function itself, on the unmodified
+// inputs, so the twin never has to reproduce them.
+//
+// Covered configuration (eligible()): lee_position controller, sequential desaturation with a
+// 4-rotor allocation model, 4 motors with RK4 and the discrete approximation (thrust or rotor-speed
+// state), semi-implicit Euler (any number of substeps), float build (the quaternion product order
+// is Eigen's SSE path). World (world_batch.cpp) also needs one robot per environment, no
+// observation noise and no random disturbance. Anything else runs the scalar path unchanged.
+#pragma once
+
+#include "kestrel/allocation/airframe.hpp"
+#include "kestrel/allocation/allocation_model.hpp"
+#include "kestrel/allocation/motor_model.hpp"
+#include "kestrel/allocation/sequential_desaturation.hpp"
+#include "kestrel/controllers/controller.hpp"
+#include "kestrel/kernel/rigid_body.hpp"
+
+namespace kestrel::sim::batch {
+
+/// Robots stepped together (4 float lanes: SSE2, which every x86-64 has; the same kernel is also
+/// compiled for AVX2 and chosen at run time, with identical results).
+constexpr int kLanes = 4;
+
+/// The constant models of one robot type (all lanes share them).
+struct Models {
+  ControllerKind controller = ControllerKind::lee_position;
+  const ControllerParams* ctrl = nullptr;
+  const allocation::AllocationModel* alloc = nullptr;
+  const allocation::SequentialDesaturationParams* desat = nullptr;
+  const allocation::MotorModelConfig* motor = nullptr;
+  const allocation::Airframe* airframe = nullptr;
+  const RigidBodyModel* body = nullptr;
+  real dt_s = 0;
+  int substeps = 1;
+};
+
+/// One lane's robot: pointers into the owner's storage (read and written in place).
+struct Lane {
+  RigidBodyState* state = nullptr;
+  ControllerState* ctrl = nullptr;
+  allocation::AllocatorState* alloc = nullptr;
+  allocation::MotorModelState* motors = nullptr;
+  const real* action = nullptr;           // the applied action (kMaxActionDim values)
+  const Vec3* contact_force_w = nullptr;  // extra world force of the previous collision pass
+  const Vec3* contact_torque_b = nullptr; // added to the rotor torque
+};
+
+/// Whether `m` is the configuration the twin covers (see the file comment).
+bool eligible(const Models& m);
+
+/// One physics step of kLanes robots; bit-identical to, per lane, update_controller ->
+/// allocate_sequential_desaturation -> motor_model_step -> wrench_from_thrusts + contact ->
+/// step_rigid_body (substeps times), as World::robot_dynamics does. Requires eligible(m).
+void robot_step(const Models& m, const Lane (&lanes)[kLanes]);
+
+/// Tests: true forces the baseline (SSE2) copy of the kernel on machines where the AVX2 copy would
+/// run, so both can be checked; returns whether the AVX2 copy is in use afterwards. Not thread-safe:
+/// call it while nothing steps.
+bool force_baseline_kernel(bool on);
+
+/// The stages alone (for the bench's per-stage split), on the same lanes; each writes what the
+/// scalar stage writes. Arrays are structure-of-arrays: wrench[k][lane] with k over
+/// [fx, fy, fz, tx, ty, tz] (body frame), thrust[motor][lane].
+void controller_stage(const Models& m, const Lane (&lanes)[kLanes], real (&wrench)[6][kLanes]);
+void allocation_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&wrench)[6][kLanes],
+                      real (&thrust)[4][kLanes]);
+/// Motor model, then the body wrench A f plus the contact torque (what step_rigid_body receives).
+void motor_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&thrust)[4][kLanes],
+                 real (&body_wrench)[6][kLanes]);
+void rigid_body_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&body_wrench)[6][kLanes]);
+
+}  // namespace kestrel::sim::batch

@@ -1,0 +1,104 @@
+// navigation_task: reach a goal through obstacles with velocity commands and an in-loop range
+// image, after Aerial Gym's navigation_task (ntnu-arl/aerial_gym_simulator,
+// aerial_gym/task/navigation_task/navigation_task.py and config/task_config/
+// navigation_task_config.py).
+//
+// What is mirrored:
+//   - goal drawn at every reset in the target ratio box of the environment's (per-reset) bounds
+//     (task_config.target_min/max_ratio, default [0.90, 0.1, 0.1] .. [0.94, 0.9, 0.9]);
+//   - observations: unit vector to the goal in the vehicle frame, distance, roll, pitch, 0 (the
+//     reference zeroes the yaw slot), body linear and angular velocity, the robot's actions, then
+//     the image part (the reference's 64 VAE latents of its depth image; here the range image of
+//     the robot's first ray sensor min-pooled to pool_rows x pool_cols, 8 x 8 = 64 by default);
+//   - reward = compute_reward(): (1 + 2 p) (pos + very_close + getting_closer + (20 - d)/20)
+//     + action-difference penalties + p * absolute-action penalties, collision -> -100, with p the
+//     curriculum progress fraction and the reference's constants (NavigationRewardParams);
+//   - obstacle curriculum: success / crash / timeout counts aggregated until check_after_episodes
+//     episodes ended, then level +increase_step if the success rate > success_rate_for_increase,
+//     -decrease_step if < success_rate_for_decrease, clamped to [min_level, max_level]
+//     (check_and_update_curriculum_level); the level goes to World::set_curriculum_level as
+//     (level - min_level) / (max_level - min_level) and takes effect at each environment's next
+//     layout.
+// Differences (why):
+//   - actions are [vx, vy, vz, yaw_rate] for lee_velocity_control, clamped to [-1, 1] and scaled
+//     by max_speed_m_s and max_yaw_rate_rad_s (the reference's commented-out
+//     action_transformation_function; its active one is for the lmf2's 3-input velocity
+//     controller, not available here);
+//   - success ends the episode at once (terminated, counted in infos.successes) when the robot is
+//     within success_radius_m (TaskConfig::success_radius_m, 1 m as the reference's check); the
+//     reference only counts a success at truncation time within 1 m;
+//   - the goal is placed clear of obstacles (World placement, TaskConfig::clearance_m; no line of
+//     sight needed): the reference's uniform draw may put it inside an obstacle;
+//   - no observation noise (the reference adds uniform noise to the goal vector and the angles
+//     with torch.rand, which is not reproducible per environment);
+//   - the previous-error memory is reset with the episode (the reference keeps the last episode's
+//     error, so its first "getting closer" term of an episode compares with the old goal);
+//   - out of bounds (World's 0.5 m margin) counts as a crash as a contact does;
+//   - curriculum levels are 0..10 steps of the obstacle-count range of the environment's asset
+//     classes (the reference counts obstacles, 15..50).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "kestrel/sim/task.hpp"
+
+namespace kestrel::sim {
+
+/// navigation_task_config.reward_parameters.
+struct NavigationRewardParams {
+  float pos_reward_magnitude = 5.0f, pos_reward_exponent = 1.0f / 3.5f;
+  float very_close_to_goal_reward_magnitude = 5.0f, very_close_to_goal_reward_exponent = 2.0f;
+  float getting_closer_reward_multiplier = 10.0f;
+  float x_action_diff_penalty_magnitude = 0.8f, x_action_diff_penalty_exponent = 3.333f;
+  float z_action_diff_penalty_magnitude = 0.8f, z_action_diff_penalty_exponent = 5.0f;
+  float yawrate_action_diff_penalty_magnitude = 0.8f, yawrate_action_diff_penalty_exponent = 3.33f;
+  float x_absolute_action_penalty_magnitude = 0.1f, x_absolute_action_penalty_exponent = 0.3f;
+  float z_absolute_action_penalty_magnitude = 1.5f, z_absolute_action_penalty_exponent = 1.0f;
+  float yawrate_absolute_action_penalty_magnitude = 1.5f, yawrate_absolute_action_penalty_exponent = 2.0f;
+  float collision_penalty = -100.0f;
+};
+
+/// navigation_task_config.curriculum (levels rescaled, see above).
+struct NavigationCurriculum {
+  int min_level = 0, max_level = 10;
+  int start_level = 0;               // the reference starts at min_level
+  int check_after_episodes = 64;     // check_after_log_instances (2048 for 1024 GPU envs)
+  int increase_step = 2, decrease_step = 1;
+  float success_rate_for_increase = 0.7f, success_rate_for_decrease = 0.6f;
+};
+
+struct NavigationParams {
+  float max_speed_m_s = 2.0f;
+  float max_yaw_rate_rad_s = 1.0471976f;  // pi / 3
+  int pool_rows = 8, pool_cols = 8;
+  NavigationRewardParams reward;
+  NavigationCurriculum curriculum;
+};
+
+/// compute_reward of the reference for one environment (float32, its expression order).
+/// `action` / `prev_action` are the transformed actions [vx, vy, vz, yaw_rate] the robot got;
+/// `progress` the curriculum progress fraction in [0, 1]; crash > 0 gives the collision penalty.
+float navigation_reward(const float pos_error[3], const float prev_pos_error[3], bool crash, const float action[4],
+                        const float prev_action[4], float progress, const NavigationRewardParams& p);
+
+/// The reference's update_curriculim_level: the next level after a window with this success rate.
+int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level);
+
+/// Observation size: 17 + pool_rows * pool_cols.
+int navigation_obs_dim(const NavigationParams& p);
+
+/// Its scripted_actions() (not a reference feature; for `kestrel run --policy scripted`): velocity
+/// towards the goal at full speed, yaw towards it, and a reactive dodge to the clearest side of
+/// the pooled image when its central half sees something within 0.65 of the sensor's range.
+/// Builds the task: needs robots_per_env = 1, controller lee_velocity_control and a ray sensor
+/// (lidar, ToF or camera) on the robot; nullptr and a message otherwise.
+std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error);
+
+/// The registered TaskConfig (registries().tasks "navigation_task").
+TaskConfig navigation_task_config();
+/// Default scene: env_with_obstacles, base quadrotor, lee_velocity_control, the 8 x 8 VL53L5CX
+/// ToF (its image is already the 8 x 8 pool; a camera pools the same way).
+TaskDefaults navigation_task_defaults();
+
+}  // namespace kestrel::sim

@@ -1,0 +1,188 @@
+// One simulator interface over two physics backends.
+//
+// The shape is legged_gym-Ex's Simulator class (the Isaac Gym calls of legged_gym's LeggedRobot
+// gathered behind one object: step with `decimation` physics steps, post_physics_step, reset_idx,
+// reset_root_states, push_robots, refreshed state tensors and domain-randomisation buffers),
+// adapted to flat float arrays and to Kestrel's robots:
+//   - rigid:  the 3-D batched World (sim/world.hpp: Newton-Euler bodies, libccd/analytic collision
+//             with penalty contact), every robot, environment and sensor it supports;
+//   - planar: Box2D 2.4 (sim/src/planar.cpp), one b2World per environment, for robots that move in a
+//             plane: a car-like ground vehicle on the velocity + steering-angle controller
+//             (kinematic bicycle model) or a multirotor held at a fixed altitude; circles and boxes
+//             as obstacles; a 2-D lidar through b2World::RayCast.
+// The backend is chosen once, by make_simulator: the KESTREL_SIMULATOR environment variable if set,
+// else the scenario's `simulator:` field, else rigid. What a backend cannot do fails with a message
+// naming the backend and the alternative (e.g. a mesh obstacle on planar: "use simulator: rigid").
+//
+// Every view is a flat array over robots, robot index = env * robots_per_env + r, valid until the
+// next call that changes state. Frames: positions and contact forces in the world frame (z up),
+// quaternions xyzw (q_wb), Euler XYZ (roll, pitch, yaw) in [-pi, pi), linear and angular velocity
+// in the body frame (legged_gym's base_lin_vel / base_ang_vel), wrench [fx fy fz tx ty tz] in the
+// body frame.
+//
+// What a task sits on (the narrow API): num_envs/num_robots/action_dim, step(actions) with
+// post_physics_step's reset_buf, reset_idx, reset_root_states, push_robots, the base_* views,
+// contact_forces_w/crashed, target_w, lidar_ranges_m (or world()->sensor_* on rigid), and the
+// domain-randomisation views for privileged observations. Nothing else of either backend.
+//
+// Determinism: per-environment streams RngStream(seed, env, purpose); environments never read each
+// other, so results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes it).
+// No heap inside step/post_physics_step/push_robots/reset_idx after set-up (planar: after Box2D's
+// block allocator and broad-phase buffers have warmed up; see planar.cpp and the heap test).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kestrel/sim/config.hpp"
+#include "kestrel/sim/world.hpp"
+
+namespace kestrel::sim {
+
+struct Registries;
+
+enum class Backend : std::uint8_t { rigid = 0, planar = 1 };
+const char* backend_name(Backend b);
+/// "rigid" / "planar"; false (out untouched) for anything else.
+[[nodiscard]] bool backend_from_name(const std::string& name, Backend& out);
+/// KESTREL_SIMULATOR (read now) if set and non-empty, else config.simulator.backend if non-empty,
+/// else rigid. An unknown name gives false and a message naming where it came from.
+[[nodiscard]] bool resolve_backend(const WorldConfig& config, Backend& out, std::string& error);
+
+/// Random stream purpose of push_robots (above kPurposeUser, see kernel/rng.hpp).
+constexpr std::uint32_t kPurposePush = kPurposeUser + 5;
+
+class Simulator {
+ public:
+  virtual ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  Backend backend() const { return backend_; }
+  const char* backend_name() const { return sim::backend_name(backend_); }
+  const WorldConfig& config() const { return cfg_; }
+  int num_envs() const { return num_envs_; }
+  int robots_per_env() const { return robots_per_env_; }
+  int num_robots() const { return num_envs_ * robots_per_env_; }
+  /// Values per robot in the action array (4 for the Lee controllers, 2 for the ground vehicle).
+  int action_dim() const { return action_dim_; }
+  /// Nominal physics steps per step() (env.num_physics_steps_per_env_step_mean, legged_gym's decimation).
+  int decimation() const { return decimation_; }
+  real dt_s() const { return cfg_.sim.dt_s; }
+  virtual int num_threads() const = 0;
+  /// Name of what drives the robots ("lee_position_control", "velocity_steering_angle", ...).
+  virtual const char* controller_name() const = 0;
+  /// True for the planar car (action [speed_m_s, steering_rad]); false for multirotors.
+  bool ground_vehicle() const { return ground_vehicle_; }
+
+  /// Copies the actions (num_robots x action_dim, row-major), runs every environment's physics
+  /// steps in parallel, then post_physics_step(). nullptr keeps the current actions: on planar the
+  /// last ones given (a reset sets them to the episode's target or zero); on rigid the World's own
+  /// (the task's setpoints, moving ones included).
+  void step(const real* actions);
+  /// Refreshes the views, sets reset_buf for environments whose episode ended in this step
+  /// (timeout, exit from the bounds, crash with reset_on_collision) and resets them (auto-reset).
+  virtual void post_physics_step() = 0;
+  /// Resets these environments now: new layout/start/target per the env config, as a timeout does.
+  virtual void reset_idx(const int* env_ids, int count) = 0;
+  /// Puts exact root states: for each listed env, robots_per_env rows of pos_w (3), quat_xyzw (4),
+  /// lin_vel_w (3), ang_vel_w (3). Controller and contact state are cleared; nothing else changes.
+  /// False (nothing written, last_error() says why) for a non-finite or non-unit quaternion, a bad
+  /// env id, or a state the backend cannot represent (planar: roll/pitch, or z off the plane).
+  [[nodiscard]] virtual bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
+                                               const real* lin_vel_w, const real* ang_vel_w) = 0;
+  /// Renders the sensors now (step() already renders them at the configured rate).
+  virtual void update_sensors() = 0;
+  /// legged_gym's _push_robots: every robot's world-frame v_x and v_y are set to values drawn
+  /// uniformly in [-max_push_vel_xy_m_s, max_push_vel_xy_m_s] from its environment's push stream.
+  void push_robots();
+
+  // State views (refreshed by post_physics_step, reset_idx, reset_root_states and push_robots).
+  const real* base_pos_w() const { return pos_w_.data(); }            // (robots x 3) m
+  const real* base_quat_xyzw() const { return quat_xyzw_.data(); }    // (robots x 4)
+  const real* base_euler_xyz() const { return euler_xyz_.data(); }    // (robots x 3) rad
+  const real* base_lin_vel_b() const { return lin_vel_b_.data(); }    // (robots x 3) m/s, body
+  const real* base_ang_vel_b() const { return ang_vel_b_.data(); }    // (robots x 3) rad/s, body
+  const real* contact_forces_w() const { return contact_w_.data(); }  // (robots x 3) N
+  const real* applied_wrench_b() const { return wrench_b_.data(); }   // (robots x 6) N, N m
+  const real* target_w() const { return target_w_.data(); }           // (robots x 3) m
+  const std::uint8_t* crashed() const { return crashed_.data(); }     // (robots)
+  const std::uint8_t* reset_buf() const { return reset_buf_.data(); } // (envs) episode ended last step
+
+  // Domain-randomisation views (drawn at each reset; robots).
+  const real* added_mass_kg() const { return added_mass_kg_.data(); }
+  const real* com_bias_b_m() const { return com_bias_b_m_.data(); }    // (robots x 3)
+  /// Multirotor: motor time constant / its nominal value; ground vehicle: drive force scale.
+  const real* motor_constant_scale() const { return motor_scale_.data(); }
+  /// Active controller gains / nominal gains (Lee: mean over the 12 gain components).
+  const real* controller_gain_scale() const { return gain_scale_.data(); }
+
+  /// 2-D lidar (planar; 0 beams on rigid, whose ray sensors are the World's, world()->sensor_*).
+  int lidar_beams() const { return lidar_beams_; }
+  const real* lidar_ranges_m() const { return lidar_.data(); }  // (robots x beams), max range = no hit
+  /// Beam k's angle in the body frame (rad, counter-clockwise from body x).
+  real lidar_beam_angle(int k) const;
+
+  /// In-step allocations that found their environment's fixed arena full and went to the heap
+  /// (planar: Box2D's growth; see planar.cpp). 0 on rigid, which never allocates in a step.
+  virtual std::uint64_t step_heap_fallbacks() const { return 0; }
+
+  virtual WorldSummary summary() const = 0;
+  /// FNV-1a over every environment's state, in environment order (as World::state_hash).
+  virtual std::uint64_t state_hash() const = 0;
+  /// The rigid backend's World (nullptr on planar).
+  virtual World* world() { return nullptr; }
+  const std::string& last_error() const { return error_; }
+
+ protected:
+  explicit Simulator(Backend b) : backend_(b) {}
+  /// Sizes every view for the config's robots (called by the backends' set-up).
+  void allocate_views(const WorldConfig& cfg, int action_dim, int lidar_beams);
+  /// Writes the views of robot i from a 3-D state.
+  void write_state_view(std::size_t i, const RigidBodyState& s);
+  /// Runs the physics steps of every environment with the current actions.
+  virtual void advance() = 0;
+  /// Sets robot i's world-frame linear velocity x and y (push_robots).
+  virtual void set_velocity_xy(int env, int robot, real vx_w, real vy_w) = 0;
+  bool fail(const std::string& m) {
+    error_ = m;
+    return false;
+  }
+
+  WorldConfig cfg_;
+  Backend backend_;
+  bool ground_vehicle_ = false;
+  bool actions_given_ = false;  // the current step() got an action array (rigid: else the World's own)
+  int num_envs_ = 0, robots_per_env_ = 0, action_dim_ = 0, decimation_ = 1, lidar_beams_ = 0;
+  std::vector<real> actions_;  // (robots x action_dim)
+  std::vector<real> pos_w_, quat_xyzw_, euler_xyz_, lin_vel_b_, ang_vel_b_, contact_w_, wrench_b_, target_w_;
+  std::vector<std::uint8_t> crashed_, reset_buf_;
+  std::vector<real> added_mass_kg_, com_bias_b_m_, motor_scale_, gain_scale_;
+  std::vector<real> lidar_;
+  std::vector<RngStream> rng_push_;
+  std::string error_;
+};
+
+/// Builds the backend resolve_backend() picks. nullptr and a message on bad input (nothing half-built).
+std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, std::string& error);
+/// The same with an explicit backend (ignores KESTREL_SIMULATOR and config.simulator.backend).
+std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, Backend backend, std::string& error);
+
+/// The scripted position-setpoint policy `kestrel run` uses through this interface: Lee position
+/// control gets the target (x, y, z or the planar altitude, yaw 0); the ground vehicle gets pure
+/// pursuit to the target (R. C. Coulter, "Implementation of the pure pursuit path tracking
+/// algorithm", CMU-RI-TR-92-01, 1992: delta = atan(2 L sin(alpha) / d)) at a speed that tapers
+/// to zero at the target. Writes num_robots x action_dim values; no heap.
+void scripted_setpoint_actions(const Simulator& sim, real* actions);
+
+/// `kestrel run` through this interface (sim/src/simulator_run.cpp): `steps` env-steps of
+/// scripted_setpoint_actions, a summary, DIR/trajectory.csv and the state hash. Returns the exit code.
+int run_scripted(Simulator& sim, const std::string& label, long long steps, const std::string& out_dir, bool quiet);
+
+/// Registers "rigid" and "planar" (simulators) and the planar presets: env "planar_obstacles",
+/// robot "ground_vehicle" (called from register_builtins).
+void register_simulators(Registries& r);
+
+}  // namespace kestrel::sim

@@ -1,0 +1,987 @@
+// Backend `planar`: Box2D 2.4 (Debian libbox2d-dev) for robots that move in a plane.
+//
+// One b2World per environment (zero gravity: the plane is horizontal), stepped by the thread pool
+// over a static partition of environments. Box2D is deterministic for a single-threaded world
+// (same inputs, same order of calls -> same bits), and no environment touches another's world, so
+// results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes them).
+// (Box2D 2.4 keeps a few global profiling counters, b2_gjkCalls / b2_toiCalls ..., that every
+// world increments without synchronisation; they are statistics only and never read back.)
+//
+// Robots:
+//  - ground_vehicle: a box on a dynamic body whose origin is the rear axle. Every physics step
+//    the velocity + steering-angle controller (controllers/velocity_steering.hpp) turns the
+//    command [speed, steering] and the measured speed along the heading into the next speed and
+//    steering angle, and the body gets the kinematic bicycle model's velocity (rear axle moving at
+//    v along the heading, yaw rate v tan(delta) / L; Rajamani 2012, sec. 2.2) before
+//    b2World::Step. Box2D's contact solver then removes any velocity into an obstacle, so a
+//    collision stops the car, and the next step starts from that measured speed.
+//  - multirotor at a fixed altitude (a reduced model, documented here): the Lee controller
+//    (position / velocity / acceleration / velocity-steering) runs on the planar state lifted to
+//    3-D (z = altitude, level attitude with the body's yaw). Attitude is assumed to track
+//    instantly (quasi-static: the attitude loop is far faster than the translation), so the
+//    desired force m (a_cmd - g) is what the tilted thrust delivers: its norm and the Lee yaw
+//    torque go through the same allocation (sequential desaturation) and motor model as the rigid
+//    World; the horizontal force is m a_cmd,xy, bounded by the horizontal thrust the realised
+//    collective thrust T leaves after holding the weight, sqrt(T^2 - (m g)^2); the yaw torque is
+//    the realised motor torque. Roll/pitch dynamics and altitude changes are not modelled.
+//
+// Obstacles: the env config's asset classes as circles (thin poles, rods, trees' trunks, spheres)
+// and yaw-rotated boxes (cubes, panels, small walls, bounding walls), one static body per slot,
+// created at set-up; a reset edits the slots' shapes in place, moves them and enables the used
+// ones, so no Box2D object is created inside a step. Roll and pitch ranges of 3-D asset classes
+// are ignored (the plane cuts their vertical extrusion); mesh obstacles are refused (rigid only).
+//
+// Sensors: a 2-D lidar of N beams over a field of view, through b2World::RayCast with a callback
+// that keeps the closest hit (it returns the hit's fraction, which clips the ray).
+//
+// Heap: Box2D allocates its contacts from a block allocator (16 KiB chunks, reused through free
+// lists) and grows its broad-phase buffers and tree node pool on demand, all through
+// b2Alloc_Default / b2Free_Default (malloc/free), which libbox2d.so calls through its PLT. Measured
+// with a process-wide malloc counter, that made a few calls in every thousand steps even after a
+// long warm-up (each new peak of contacts or proxies in some environment). So this file defines
+// both functions (they interpose on the library's; sim/CMakeLists.txt exports them from every
+// executable that links kestrel_sim): outside a step they are malloc/free; inside a step (a
+// thread-local arena is set while an environment steps or resets) they bump-allocate from that
+// environment's arena, sized at set-up (kStepArenaBytes). Arena memory freed by Box2D is not
+// reused (growth is rare and geometric); a full arena falls back to malloc and is counted
+// (Simulator::step_heap_fallbacks), never silent. tests/sim/planar_heap_test.cpp checks zero
+// malloc calls inside steps.
+#include <box2d/box2d.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "kestrel/allocation/allocation_model.hpp"
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/allocation/sequential_desaturation.hpp"
+#include "kestrel/controllers/velocity_steering.hpp"
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/simulator.hpp"
+#include "kestrel/sim/thread_pool.hpp"
+
+namespace kestrel::sim {
+
+namespace al = kestrel::allocation;
+
+namespace {
+
+constexpr std::size_t kStepArenaBytes = 96 * 1024;  // per environment: ~5 block-allocator chunks
+
+/// One environment's in-step allocation arena (bump allocator over set-up storage).
+struct StepArena {
+  unsigned char* base = nullptr;
+  std::size_t size = 0, used = 0;
+  std::uint64_t fallbacks = 0;  // allocations that did not fit and went to malloc
+};
+thread_local StepArena* t_arena = nullptr;
+
+/// Sets the calling thread's arena for a scope (the worker stepping an environment).
+struct ArenaScope {
+  StepArena* saved;
+  explicit ArenaScope(StepArena* a) : saved(t_arena) { t_arena = a; }
+  ~ArenaScope() { t_arena = saved; }
+  ArenaScope(const ArenaScope&) = delete;
+  ArenaScope& operator=(const ArenaScope&) = delete;
+};
+
+// Every block carries a 16-byte header saying where it came from, so b2Free_Default needs no
+// lookup: malloc'd blocks are freed, arena blocks are left to their arena.
+constexpr std::uint32_t kFromMalloc = 0x4d414c43u, kFromArena = 0x4152454eu;
+constexpr std::size_t kHeader = 16;
+
+}  // namespace
+}  // namespace kestrel::sim
+
+// Box2D's allocation hooks (b2_settings.h), interposed on libbox2d.so's definitions.
+void* b2Alloc_Default(int32 size) {
+  using kestrel::sim::t_arena;
+  const std::size_t n = (static_cast<std::size_t>(size > 0 ? size : 1) + kestrel::sim::kHeader + 15) & ~static_cast<std::size_t>(15);
+  unsigned char* p = nullptr;
+  std::uint32_t tag = kestrel::sim::kFromMalloc;
+  if (t_arena != nullptr && t_arena->used + n <= t_arena->size) {
+    p = t_arena->base + t_arena->used;
+    t_arena->used += n;
+    tag = kestrel::sim::kFromArena;
+  } else {
+    if (t_arena != nullptr) ++t_arena->fallbacks;
+    p = static_cast<unsigned char*>(std::malloc(n));
+    if (p == nullptr) return nullptr;
+  }
+  std::memcpy(p, &tag, sizeof(tag));
+  return p + kestrel::sim::kHeader;
+}
+
+void b2Free_Default(void* mem) {
+  if (mem == nullptr) return;
+  unsigned char* p = static_cast<unsigned char*>(mem) - kestrel::sim::kHeader;
+  std::uint32_t tag = 0;
+  std::memcpy(&tag, p, sizeof(tag));
+  if (tag == kestrel::sim::kFromMalloc) std::free(p);
+}
+
+namespace kestrel::sim {
+namespace {
+
+constexpr int kVelocityIterations = 8;  // Box2D's recommended defaults
+constexpr int kPositionIterations = 3;
+
+enum class SlotShape : std::uint8_t { circle, box };
+
+struct Slot {
+  b2Body* body = nullptr;
+  SlotShape shape = SlotShape::circle;
+  std::uint8_t class_index = 0;
+  bool used = false;
+  real x = 0, y = 0, yaw = 0, radius = 0, hx = 0, hy = 0;  // current geometry
+};
+
+/// Collects the normal impulses on robot bodies (user data = robot index + 1).
+class ContactForces final : public b2ContactListener {
+ public:
+  real* force_xy = nullptr;      // (robots_per_env x 2) N, world frame, last physics step
+  real* normal_sum_N = nullptr;  // (robots_per_env) sum of normal force magnitudes
+  float inv_dt = 0;
+  void PostSolve(b2Contact* c, const b2ContactImpulse* imp) override {
+    const std::uintptr_t ua = c->GetFixtureA()->GetBody()->GetUserData().pointer;
+    const std::uintptr_t ub = c->GetFixtureB()->GetBody()->GetUserData().pointer;
+    if (ua == 0 && ub == 0) return;
+    b2WorldManifold wm;
+    c->GetWorldManifold(&wm);  // normal points from A to B
+    float p = 0;
+    for (int k = 0; k < imp->count; ++k) p += imp->normalImpulses[k];
+    const float f = p * inv_dt;
+    if (ub != 0) add(ub - 1, wm.normal.x * f, wm.normal.y * f, f);
+    if (ua != 0) add(ua - 1, -wm.normal.x * f, -wm.normal.y * f, f);
+  }
+
+ private:
+  void add(std::uintptr_t r, float fx, float fy, float f) {
+    force_xy[2 * r] += static_cast<real>(fx);
+    force_xy[2 * r + 1] += static_cast<real>(fy);
+    normal_sum_N[r] += static_cast<real>(f);
+  }
+};
+
+/// Closest hit along a ray, ignoring one body (the robot carrying the lidar).
+class ClosestHit final : public b2RayCastCallback {
+ public:
+  const b2Body* ignore = nullptr;
+  float fraction = 1;
+  bool hit = false;
+  float ReportFixture(b2Fixture* f, const b2Vec2&, const b2Vec2&, float frac) override {
+    if (f->GetBody() == ignore) return -1;  // filter: continue as if not there
+    hit = true;
+    fraction = frac;
+    return frac;  // clip the ray here: only closer hits are reported from now on
+  }
+};
+
+struct Env {
+  StepArena arena;  // in-step Box2D allocations (before the world: it outlives nothing it serves)
+  std::unique_ptr<b2World> world;
+  ContactForces contacts;
+  std::vector<b2Body*> robots;
+  std::vector<Slot> slots;
+  RngStream rng_reset, rng_step;
+  Vec3 lower = Vec3::Zero(), upper = Vec3::Zero();
+  int episode_step = 0, episodes_since_layout = 0;
+  std::uint32_t layout_generation = 0;
+  EnvStats stats;
+};
+
+real clearance_to_slot(const Slot& s, real x, real y) {
+  if (s.shape == SlotShape::circle) return std::sqrt((x - s.x) * (x - s.x) + (y - s.y) * (y - s.y)) - s.radius;
+  real sn = 0, cs = 1;
+  sin_cos(s.yaw, sn, cs);
+  const real dx = x - s.x, dy = y - s.y;
+  const real lx = cs * dx + sn * dy, ly = -sn * dx + cs * dy;  // point in the box frame
+  const real qx = std::fabs(lx) - s.hx, qy = std::fabs(ly) - s.hy;
+  const real ox = std::max(qx, 0_r), oy = std::max(qy, 0_r);
+  return std::sqrt(ox * ox + oy * oy) + std::min(std::max(qx, qy), 0_r);  // signed distance to a box
+}
+
+class PlanarSimulator final : public Simulator {
+ public:
+  PlanarSimulator() : Simulator(Backend::planar) {}
+
+  bool init(const WorldConfig& c, std::string& error) {
+    auto bad = [&](const std::string& m) {
+      error = "simulator planar: " + m;
+      return false;
+    };
+    const SimulatorConfig& sc = c.simulator;
+    const EnvConfig& e = c.env;
+    if (e.num_envs < 1) return bad("env.num_envs: expected a positive integer");
+    if (c.robot.robots_per_env < 1) return bad("robot.robots_per_env: expected a positive integer");
+    if (!(c.sim.dt_s > 0)) return bad("sim.dt_s: expected a positive number");
+    if (c.num_threads < 1) return bad("threads: expected a positive integer");
+    if (c.task.episode_len_env_steps < 1) return bad("task.episode_len_env_steps: expected a positive integer");
+    if (!(e.num_physics_steps_per_env_step_mean >= 1)) return bad("env.num_physics_steps_per_env_step_mean: expected >= 1");
+    if (c.task.placement_attempts < 1 || c.task.placement_attempts > kMaxPlacementAttempts)
+      return bad("task.placement_attempts: expected an integer in [1, " + std::to_string(kMaxPlacementAttempts) + "]");
+    if (!c.robot.sensors.empty())
+      return bad("robot sensors (" + c.robot.sensors.front().name +
+                 ") render 3-D scenes; planar has a 2-D lidar (simulator.lidar_beams); use simulator: rigid for 3-D sensors");
+    if (e.sample_timestep_for_latency || e.num_physics_steps_per_env_step_std != 0 || e.perturb_observations || e.enable_disturbance)
+      return bad("latency sampling, random physics-step counts, observation noise and disturbances are rigid-only; use simulator: rigid");
+    if (!(sc.max_push_vel_xy_m_s >= 0) || !(sc.added_mass_min_kg <= sc.added_mass_max_kg) || !(sc.motor_scale_min > 0) ||
+        !(sc.motor_scale_min <= sc.motor_scale_max) || !(sc.gain_scale_min > 0) || !(sc.gain_scale_min <= sc.gain_scale_max) ||
+        !(sc.com_bias_max_m >= 0) || !(c.robot.mass_kg + sc.added_mass_min_kg > 0))
+      return bad("simulator: randomisation ranges need min <= max, scales > 0, com_bias_max_m >= 0 and a positive total mass");
+    if (sc.lidar_beams < 0 || sc.lidar_beams > 4096 || !(sc.lidar_max_range_m > 0) || !(sc.lidar_fov_rad > 0 && sc.lidar_fov_rad <= kTwoPi))
+      return bad("simulator.lidar_*: expected 0..4096 beams, a positive range and a field of view in (0, 2 pi]");
+    if (e.terrain.type == TerrainType::heightfield)
+      return bad("env.terrain: a height field is 3-D ground the plane cannot represent; use simulator: rigid");
+    if (e.terrain.type == TerrainType::trimesh)
+      return bad("env.terrain: triangle-mesh terrain is 3-D ground the plane cannot represent; use simulator: rigid");
+    if (e.terrain.measure_heights) return bad("env.terrain.measure_heights: no heights on a plane; use simulator: rigid");
+    for (const AssetClass& a : e.assets) {
+      if (a.max_angular_speed_rad_s > 0)
+        return bad("env.assets." + a.name + ": spinning obstacles are rigid-only; use simulator: rigid");
+      if (a.kind == AssetKind::mesh)
+        return bad("env.assets." + a.name + ": 3-D mesh obstacles are not supported (circles and boxes only); use simulator: rigid");
+      if (a.max_speed_m_s > 0) return bad("env.assets." + a.name + ": moving obstacles are rigid-only; use simulator: rigid");
+      if (a.num_assets < 0 || a.min_num_assets < 0 || a.min_num_assets > a.num_assets)
+        return bad("env.assets." + a.name + ": expected 0 <= min_num_assets <= num_assets");
+    }
+    for (int i = 0; i < 2; ++i)
+      if (!(e.lower_bound_min_m[i] <= e.lower_bound_max_m[i] && e.upper_bound_min_m[i] <= e.upper_bound_max_m[i] &&
+            e.lower_bound_max_m[i] < e.upper_bound_min_m[i]))
+        return bad("env bounds: expected lower_bound_min <= lower_bound_max < upper_bound_min <= upper_bound_max on x and y");
+
+    ground_ = sc.vehicle == PlanarVehicle::ground_vehicle || (sc.vehicle == PlanarVehicle::automatic && c.robot.name == "ground_vehicle");
+    ground_vehicle_ = ground_;
+    int adim = 0;
+    if (ground_) {
+      vs_.wheelbase_m = sc.wheelbase_m;
+      vs_.mass_kg = c.robot.mass_kg;
+      vs_.max_speed_m_s = sc.max_speed_m_s;
+      vs_.max_steering_rad = sc.max_steering_rad;
+      if (validate_velocity_steering_params(vs_) != Status::ok)
+        return bad("simulator.wheelbase_m / max_speed_m_s / max_steering_rad: expected positive values, steering < 1.5 rad");
+      adim = static_cast<int>(kVelocitySteeringActionDim);
+      controller_ = "velocity_steering_angle";
+    } else {
+      const ControllerKind k = c.controller.kind;
+      if (k != ControllerKind::lee_position && k != ControllerKind::lee_velocity && k != ControllerKind::lee_acceleration &&
+          k != ControllerKind::lee_velocity_steering_angle)
+        return bad("controller " + c.controller.name +
+                   " needs roll/pitch dynamics; the planar multirotor takes lee_position_control, lee_velocity_control, "
+                   "lee_acceleration_control or lee_velocity_steering_angle_control; use simulator: rigid");
+      if (c.robot.name == "ground_vehicle") return bad("robot ground_vehicle with simulator.vehicle multirotor; pick a multirotor robot");
+      const al::AirframeSpec& spec = al::airframe_spec(c.robot.airframe);
+      if (al::make_airframe(spec, airframe_) != Status::ok) return bad("robot.airframe: invalid airframe");
+      const Status am = al::build_allocation_model(airframe_, alloc_model_);
+      if (am != Status::ok && am != Status::singular) return bad("robot.airframe: allocation model failed");
+      motor_cfg_ = al::motor_model_preset(c.robot.airframe);
+      ctrl_.lee = lee_params_base_quadrotor();
+      ctrl_.lee.mass_kg = c.robot.mass_kg;
+      ctrl_.lee.inertia_b = c.robot.inertia_diag_kg_m2.asDiagonal();
+      ctrl_.lee.gravity_w = Vec3(0, 0, -kStandardGravity);
+      ctrl_.lee.randomize_gains = c.controller.randomize_gains;
+      if (validate_lee_params(ctrl_.lee) != Status::ok) return bad("controller: invalid Lee parameters");
+      adim = static_cast<int>(controller_action_dim(k, ctrl_));
+      controller_ = c.controller.name;
+    }
+    // Robot footprint.
+    const ShapeSpec& sh = c.robot.shape;
+    if (ground_) {
+      half_x_ = sh.type == ShapeType::box ? sh.half_extents_m[0] : 0.25_r;
+      half_y_ = sh.type == ShapeType::box ? sh.half_extents_m[1] : 0.15_r;
+      // The origin is the rear axle and the box centre half a wheelbase ahead: the disc about the
+      // origin that covers the box (placement clearance is measured from the origin).
+      bound_r_ = std::sqrt((std::fabs(sc.wheelbase_m / 2) + half_x_) * (std::fabs(sc.wheelbase_m / 2) + half_x_) + half_y_ * half_y_);
+    } else {
+      radius_ = sh.type == ShapeType::box ? std::sqrt(sh.half_extents_m[0] * sh.half_extents_m[0] + sh.half_extents_m[1] * sh.half_extents_m[1])
+                                          : sh.radius_m;
+      bound_r_ = radius_;
+    }
+    allocate_views(c, adim, sc.lidar_beams);
+    plane_z_ = ground_ ? 0_r : sc.altitude_m;
+    const std::size_t nr = static_cast<std::size_t>(num_robots());
+    steer_.assign(nr, VelocitySteeringState());
+    lee_.assign(nr, ControllerState());
+    alloc_.assign(nr, al::AllocatorState());
+    motors_.assign(nr, al::MotorModelState());
+    force_xy_.assign(2 * nr, 0);
+    normal_sum_.assign(nr, 0);
+    prev_omega_.assign(nr, 0);
+    kin_.assign(5 * nr, 0);
+    envs_.resize(static_cast<std::size_t>(num_envs_));
+    arena_storage_.reset(new unsigned char[kStepArenaBytes * static_cast<std::size_t>(num_envs_)]);
+    for (int ei = 0; ei < num_envs_; ++ei) {
+      StepArena& a = envs_[static_cast<std::size_t>(ei)].arena;
+      a.base = arena_storage_.get() + kStepArenaBytes * static_cast<std::size_t>(ei);
+      a.size = kStepArenaBytes;
+    }
+    for (int ei = 0; ei < num_envs_; ++ei) build_env(ei);
+    for (int ei = 0; ei < num_envs_; ++ei) {
+      reset_env(ei);
+      envs_[static_cast<std::size_t>(ei)].stats.resets = 0;  // the initial reset is not counted
+    }
+    pool_.reset(new ThreadPool(std::min(c.num_threads, num_envs_)));
+    refresh_all();
+    return true;
+  }
+
+  int num_threads() const override { return pool_->size(); }
+  const char* controller_name() const override { return controller_.c_str(); }
+
+  void post_physics_step() override {
+    phase_ = Phase::post;
+    pool_->run(&PlanarSimulator::trampoline, this);
+    refresh_all();
+  }
+
+  void reset_idx(const int* env_ids, int count) override {
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) {
+        ArenaScope arena(&envs_[static_cast<std::size_t>(env_ids[k])].arena);
+        reset_env(env_ids[k]);
+      }
+    refresh_all();
+  }
+
+  bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
+                         const real* ang_vel_w) override {
+    const int rows = count * robots_per_env_;
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] < 0 || env_ids[k] >= num_envs_) return fail("simulator planar: reset_root_states: env id " + std::to_string(env_ids[k]) + " out of range");
+    for (int j = 0; j < rows; ++j) {
+      const std::string row = " (row " + std::to_string(j) + ")";
+      if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
+          !all_finite(ang_vel_w + 3 * j, 3))
+        return fail("simulator planar: reset_root_states: non-finite value" + row);
+      const real* q = quat_xyzw + 4 * j;
+      const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+      if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail("simulator planar: reset_root_states: quaternion is not unit length" + row);
+      if (std::fabs(q[0]) > 1e-4_r || std::fabs(q[1]) > 1e-4_r || std::fabs(ang_vel_w[3 * j]) > 1e-6_r ||
+          std::fabs(ang_vel_w[3 * j + 1]) > 1e-6_r)
+        return fail("simulator planar: reset_root_states: roll/pitch (a non-yaw orientation or x/y angular velocity) cannot "
+                    "be represented in the plane" + row + "; use simulator: rigid");
+      if (std::fabs(pos_w[3 * j + 2] - plane_z_) > 1e-4_r || std::fabs(lin_vel_w[3 * j + 2]) > 1e-6_r)
+        return fail("simulator planar: reset_root_states: z must be the plane height " + std::to_string(plane_z_) +
+                    " with zero vertical velocity" + row + "; use simulator: rigid for 3-D states");
+    }
+    for (int k = 0; k < count; ++k) {
+      Env& ev = envs_[static_cast<std::size_t>(env_ids[k])];
+      ArenaScope arena(&ev.arena);
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const int j = k * robots_per_env_ + r;
+        const std::size_t i = static_cast<std::size_t>(env_ids[k] * robots_per_env_ + r);
+        const real* q = quat_xyzw + 4 * j;
+        const real yaw = 2 * std::atan2(q[2], q[3]);
+        place_body(ev.robots[static_cast<std::size_t>(r)], i, pos_w[3 * j], pos_w[3 * j + 1], wrap_pi(yaw), lin_vel_w[3 * j],
+                   lin_vel_w[3 * j + 1], ang_vel_w[3 * j + 2]);
+        reset_controller(i, ev.rng_reset, false);
+        crashed_[i] = 0;
+        force_xy_[2 * i] = force_xy_[2 * i + 1] = normal_sum_[i] = 0;
+        refresh_robot(env_ids[k], r);
+      }
+    }
+    return true;
+  }
+
+  void update_sensors() override {
+    for (int ei = 0; ei < num_envs_; ++ei) {
+      ArenaScope arena(&envs_[static_cast<std::size_t>(ei)].arena);
+      render_lidar(ei);
+    }
+  }
+
+  std::uint64_t step_heap_fallbacks() const override {
+    std::uint64_t n = 0;
+    for (const Env& ev : envs_) n += ev.arena.fallbacks;
+    return n;
+  }
+
+  WorldSummary summary() const override {
+    WorldSummary s;
+    double err = 0, end_dist = 0, final_dist = 0;
+    for (int ei = 0; ei < num_envs_; ++ei) {
+      const EnvStats& st = envs_[static_cast<std::size_t>(ei)].stats;
+      s.env_steps += st.env_steps;
+      s.crashes += st.crashes;
+      s.resets += st.resets;
+      s.timeouts += st.timeouts;
+      s.out_of_bounds += st.out_of_bounds;
+      s.episodes_done += st.episodes_done;
+      s.successes += st.successes;
+      s.placement_fallbacks += st.placement_fallbacks;
+      err += st.tracking_error_sum_m;
+      end_dist += st.final_distance_sum_m;
+      for (int r = 0; r < robots_per_env_; ++r) final_dist += static_cast<double>(distance_to_target(ei, r));
+    }
+    s.mean_tracking_error_m = s.env_steps > 0 ? err / (static_cast<double>(s.env_steps) * robots_per_env_) : 0;
+    s.final_mean_distance_m = final_dist / static_cast<double>(num_robots());
+    s.episode_end_distance_m = s.episodes_done > 0 ? end_dist / static_cast<double>(s.episodes_done) : 0;
+    return s;
+  }
+
+  std::uint64_t state_hash() const override {
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64 (Fowler, Noll, Vo), as World::state_hash
+    auto bytes = [&h](const void* p, std::size_t n) {
+      const unsigned char* c = static_cast<const unsigned char*>(p);
+      for (std::size_t k = 0; k < n; ++k) {
+        h ^= c[k];
+        h *= 1099511628211ull;
+      }
+    };
+    for (int ei = 0; ei < num_envs_; ++ei) {
+      const Env& ev = envs_[static_cast<std::size_t>(ei)];
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const b2Body* b = ev.robots[static_cast<std::size_t>(r)];
+        const b2Vec2 p = b->GetPosition(), v = b->GetLinearVelocity();
+        const float a = b->GetAngle(), w = b->GetAngularVelocity();
+        bytes(&p, sizeof(p));
+        bytes(&a, sizeof(a));
+        bytes(&v, sizeof(v));
+        bytes(&w, sizeof(w));
+        const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+        if (ground_) bytes(&steer_[i].steering_rad, sizeof(real));
+        else bytes(motors_[i].thrust_N, sizeof(real) * static_cast<std::size_t>(airframe_.num_rotors));
+        bytes(&crashed_[i], 1);
+        if (lidar_beams_ > 0) bytes(&lidar_[i * static_cast<std::size_t>(lidar_beams_)], sizeof(real) * static_cast<std::size_t>(lidar_beams_));
+      }
+      for (const Slot& s : ev.slots)
+        if (s.used) {
+          bytes(&s.x, sizeof(real));
+          bytes(&s.y, sizeof(real));
+        }
+      bytes(&ev.episode_step, sizeof(int));
+      bytes(&ev.stats.resets, sizeof(ev.stats.resets));
+      bytes(&ev.stats.crashes, sizeof(ev.stats.crashes));
+    }
+    return h;
+  }
+
+  static void trampoline(void* ctx, int worker) { static_cast<PlanarSimulator*>(ctx)->run_slice(worker); }
+
+ protected:
+  void advance() override {
+    phase_ = Phase::physics;
+    pool_->run(&PlanarSimulator::trampoline, this);
+  }
+
+  void set_velocity_xy(int env, int robot, real vx, real vy) override {
+    ArenaScope arena(&envs_[static_cast<std::size_t>(env)].arena);
+    b2Body* b = envs_[static_cast<std::size_t>(env)].robots[static_cast<std::size_t>(robot)];
+    // The interface's velocity is the robot origin's (rear axle / centre); Box2D keeps the centre
+    // of mass's: add w x (c - origin).
+    const b2Vec2 o = b->GetPosition(), c = b->GetWorldCenter();
+    const float w = b->GetAngularVelocity();
+    b->SetLinearVelocity(b2Vec2(static_cast<float>(vx) - w * (c.y - o.y), static_cast<float>(vy) + w * (c.x - o.x)));
+    refresh_robot(env, robot);
+  }
+
+ private:
+  enum class Phase { physics, post };
+
+  void run_slice(int worker) {
+    const int t = pool_->size();
+    const int begin = static_cast<int>(static_cast<long long>(num_envs_) * worker / t);
+    const int end = static_cast<int>(static_cast<long long>(num_envs_) * (worker + 1) / t);
+    for (int ei = begin; ei < end; ++ei) {
+      ArenaScope arena(&envs_[static_cast<std::size_t>(ei)].arena);
+      if (phase_ == Phase::physics) env_physics(ei);
+      else env_post(ei);
+    }
+  }
+
+  // ---- set-up ------------------------------------------------------------------------------
+  void build_env(int ei) {
+    Env& ev = envs_[static_cast<std::size_t>(ei)];
+    ev.world.reset(new b2World(b2Vec2(0, 0)));
+    ev.world->SetAllowSleeping(false);  // a parked robot must still see new velocity commands
+    ev.contacts.force_xy = &force_xy_[static_cast<std::size_t>(2 * ei * robots_per_env_)];
+    ev.contacts.normal_sum_N = &normal_sum_[static_cast<std::size_t>(ei * robots_per_env_)];
+    ev.contacts.inv_dt = 1.0f / static_cast<float>(cfg_.sim.dt_s);
+    ev.world->SetContactListener(&ev.contacts);
+    ev.rng_reset = RngStream(cfg_.seed, static_cast<std::uint32_t>(ei), kPurposeReset);
+    ev.rng_step = RngStream(cfg_.seed, static_cast<std::uint32_t>(ei), kPurposeDisturbance);
+    for (int r = 0; r < robots_per_env_; ++r) {
+      b2BodyDef bd;
+      bd.type = b2_dynamicBody;
+      bd.bullet = false;
+      bd.userData.pointer = static_cast<std::uintptr_t>(r + 1);
+      b2Body* b = ev.world->CreateBody(&bd);
+      b2FixtureDef fd;
+      b2PolygonShape box;
+      b2CircleShape circle;
+      if (ground_) {
+        // Origin at the rear axle; the box centre sits half a wheelbase ahead of it.
+        box.SetAsBox(static_cast<float>(half_x_), static_cast<float>(half_y_), b2Vec2(static_cast<float>(vs_.wheelbase_m / 2), 0), 0);
+        fd.shape = &box;
+      } else {
+        circle.m_radius = static_cast<float>(radius_);
+        fd.shape = &circle;
+      }
+      fd.density = 1;
+      fd.friction = 0.3f;
+      fd.restitution = 0;
+      b->CreateFixture(&fd);
+      ev.robots.push_back(b);
+    }
+    // Obstacle slots: one static body per slot of each asset class, disabled until used.
+    for (std::size_t ci = 0; ci < cfg_.env.assets.size(); ++ci) {
+      const AssetClass& a = cfg_.env.assets[ci];
+      const bool is_box = a.kind == AssetKind::cube || a.kind == AssetKind::panel || a.kind == AssetKind::small_wall || a.kind == AssetKind::wall;
+      const int n = a.kind == AssetKind::wall ? 4 : a.num_assets;
+      for (int k = 0; k < n; ++k) {
+        b2BodyDef bd;
+        bd.type = b2_staticBody;
+        bd.enabled = false;
+        Slot s;
+        s.body = ev.world->CreateBody(&bd);
+        s.shape = is_box ? SlotShape::box : SlotShape::circle;
+        s.class_index = static_cast<std::uint8_t>(ci);
+        b2FixtureDef fd;
+        b2PolygonShape box;
+        b2CircleShape circle;
+        box.SetAsBox(0.5f, 0.5f);
+        circle.m_radius = 0.5f;
+        fd.shape = is_box ? static_cast<b2Shape*>(&box) : static_cast<b2Shape*>(&circle);
+        fd.friction = 0.3f;
+        s.body->CreateFixture(&fd);
+        ev.slots.push_back(s);
+      }
+    }
+  }
+
+  // ---- reset -------------------------------------------------------------------------------
+  static Vec3 uniform_vec(RngStream& rng, const Vec3& lo, const Vec3& hi) {
+    Vec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = lo[i] < hi[i] ? rng.uniform(lo[i], hi[i]) : lo[i];
+    return v;
+  }
+
+  void set_slot(Slot& s, real x, real y, real yaw, real radius, real hx, real hy) {
+    s.x = x;
+    s.y = y;
+    s.yaw = yaw;
+    s.radius = radius;
+    s.hx = hx;
+    s.hy = hy;
+    s.used = true;
+    b2Shape* shape = s.body->GetFixtureList()->GetShape();
+    if (s.shape == SlotShape::circle) static_cast<b2CircleShape*>(shape)->m_radius = static_cast<float>(radius);
+    else static_cast<b2PolygonShape*>(shape)->SetAsBox(static_cast<float>(hx), static_cast<float>(hy));
+    // SetTransform re-synchronises the broad-phase proxy with the edited shape when enabled;
+    // SetEnabled(true) creates it from the edited shape otherwise.
+    s.body->SetTransform(b2Vec2(static_cast<float>(x), static_cast<float>(y)), static_cast<float>(yaw));
+    if (!s.body->IsEnabled()) s.body->SetEnabled(true);
+  }
+
+  void generate_layout(Env& ev) {
+    RngStream& rng = ev.rng_reset;
+    for (Slot& s : ev.slots) s.used = false;
+    const Vec3 lo = ev.lower, hi = ev.upper, span = hi - lo;
+    std::size_t slot = 0;
+    const real level = cfg_.env.curriculum_level;
+    for (std::size_t ci = 0; ci < cfg_.env.assets.size(); ++ci) {
+      const AssetClass& c = cfg_.env.assets[ci];
+      if (c.kind == AssetKind::wall) {
+        const real t = 0.05_r, mx = (lo[0] + hi[0]) / 2, my = (lo[1] + hi[1]) / 2;
+        set_slot(ev.slots[slot++], lo[0] - t, my, 0, 0, t, span[1] / 2 + t);
+        set_slot(ev.slots[slot++], hi[0] + t, my, 0, 0, t, span[1] / 2 + t);
+        set_slot(ev.slots[slot++], mx, lo[1] - t, 0, 0, span[0] / 2 + t, t);
+        set_slot(ev.slots[slot++], mx, hi[1] + t, 0, 0, span[0] / 2 + t, t);
+        continue;
+      }
+      const int count = c.keep_in_env ? c.num_assets
+                                      : c.min_num_assets + static_cast<int>(std::floor(
+                                            level * static_cast<real>(c.num_assets - c.min_num_assets) + 0.5_r));
+      const std::size_t first = slot;
+      for (int k = 0; k < c.num_assets; ++k) {
+        // Always the same draws per asset (used or not), so the stream does not depend on the level.
+        const Vec3 ratio = uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
+        const Vec3 eul = uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
+        const Vec3 size = uniform_vec(rng, c.min_size_m, c.max_size_m);
+        Slot& s = ev.slots[first + static_cast<std::size_t>(k)];
+        if (k >= count) continue;
+        const real x = lo[0] + ratio[0] * span[0], y = lo[1] + ratio[1] * span[1];
+        switch (c.kind) {
+          case AssetKind::cube: set_slot(s, x, y, eul[2], 0, size[0] / 2, size[0] / 2); break;
+          case AssetKind::panel: set_slot(s, x, y, eul[2], 0, 0.025_r, size[1] / 2); break;
+          case AssetKind::small_wall: set_slot(s, x, y, eul[2], 0, 0.05_r, size[1] / 2); break;
+          default: set_slot(s, x, y, 0, size[0], 0, 0); break;  // circles: poles, rods, trunks, spheres
+        }
+      }
+      slot = first + static_cast<std::size_t>(c.num_assets);
+    }
+    for (Slot& s : ev.slots)
+      if (!s.used && s.body->IsEnabled()) s.body->SetEnabled(false);
+  }
+
+  bool clear_point(const Env& ev, real x, real y) const {
+    const real need = bound_r_ + cfg_.task.clearance_m;
+    for (const Slot& s : ev.slots)
+      if (s.used && clearance_to_slot(s, x, y) < need) return false;
+    return true;
+  }
+
+  bool clear_segment(const Env& ev, real x0, real y0, real x1, real y1) const {
+    const real len = std::sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0));
+    const int n = 1 + static_cast<int>(len / 0.1_r);
+    for (int k = 0; k <= n; ++k) {
+      const real t = static_cast<real>(k) / static_cast<real>(n);
+      if (!clear_point(ev, x0 + t * (x1 - x0), y0 + t * (y1 - y0))) return false;
+    }
+    return true;
+  }
+
+  void place_body(b2Body* b, std::size_t i, real x, real y, real yaw, real vx, real vy, real w) {
+    b->SetTransform(b2Vec2(static_cast<float>(x), static_cast<float>(y)), static_cast<float>(yaw));
+    b->SetAngularVelocity(static_cast<float>(w));
+    const b2Vec2 o = b->GetPosition(), c = b->GetWorldCenter();
+    const float wf = static_cast<float>(w);
+    b->SetLinearVelocity(b2Vec2(static_cast<float>(vx) - wf * (c.y - o.y), static_cast<float>(vy) + wf * (c.x - o.x)));
+    real sn = 0, cs = 1;
+    sin_cos(static_cast<real>(b->GetAngle()), sn, cs);
+    remember_kinematics(b, i, vx * cs + vy * sn, cs, sn);
+  }
+
+  /// Controller/motor state of robot i; with draw, also the domain randomisation draws.
+  void reset_controller(std::size_t i, RngStream& rng, bool draw) {
+    if (draw) {
+      const SimulatorConfig& sc = cfg_.simulator;
+      // Always five draws, in this order: added mass, CoM bias x, y, motor scale, gain scale.
+      added_mass_kg_[i] = rng.uniform(sc.added_mass_min_kg, sc.added_mass_max_kg);
+      com_bias_b_m_[3 * i] = rng.uniform(-sc.com_bias_max_m, sc.com_bias_max_m);
+      com_bias_b_m_[3 * i + 1] = rng.uniform(-sc.com_bias_max_m, sc.com_bias_max_m);
+      com_bias_b_m_[3 * i + 2] = 0;
+      motor_scale_[i] = rng.uniform(sc.motor_scale_min, sc.motor_scale_max);
+      gain_scale_[i] = rng.uniform(sc.gain_scale_min, sc.gain_scale_max);
+    }
+    prev_omega_[i] = 0;
+    if (ground_) {
+      velocity_steering_reset(steer_[i], gain_scale_[i]);
+      return;
+    }
+    controller_reset(cfg_.controller.kind, ctrl_, lee_[i], rng);
+    LeeGains& g = lee_[i].lee.gains;
+    g.k_pos *= gain_scale_[i];
+    g.k_vel *= gain_scale_[i];
+    g.k_rot *= gain_scale_[i];
+    g.k_angvel *= gain_scale_[i];
+    al::reset_allocator(alloc_[i]);
+    real hover[al::kMaxRotors] = {};
+    const real per_motor = mass(i) * kStandardGravity / static_cast<real>(airframe_.num_rotors);
+    for (int m = 0; m < airframe_.num_rotors; ++m) hover[m] = per_motor;
+    (void)al::motor_model_reset(motor_cfg_, motors_[i], rng, hover);
+    for (int m = 0; m < airframe_.num_rotors; ++m) {
+      motors_[i].time_constant_increasing_s[m] *= motor_scale_[i];
+      motors_[i].time_constant_decreasing_s[m] *= motor_scale_[i];
+    }
+  }
+
+  real mass(std::size_t i) const { return cfg_.robot.mass_kg + added_mass_kg_[i]; }
+
+  void apply_mass(b2Body* b, std::size_t i) {
+    b2MassData md;
+    md.mass = static_cast<float>(mass(i));
+    const real cx = (ground_ ? vs_.wheelbase_m / 2 : 0_r) + com_bias_b_m_[3 * i], cy = com_bias_b_m_[3 * i + 1];
+    md.center = b2Vec2(static_cast<float>(cx), static_cast<float>(cy));
+    // Box2D's I is about the body origin: I_com (yaw inertia scaled with the mass) + m |c|^2.
+    const real izz = cfg_.robot.inertia_diag_kg_m2[2] * mass(i) / cfg_.robot.mass_kg;
+    md.I = static_cast<float>(izz + mass(i) * (cx * cx + cy * cy));
+    b->SetMassData(&md);
+  }
+
+  void reset_env(int ei) {
+    Env& ev = envs_[static_cast<std::size_t>(ei)];
+    RngStream& rng = ev.rng_reset;
+    const EnvConfig& e = cfg_.env;
+    ev.lower = uniform_vec(rng, e.lower_bound_min_m, e.lower_bound_max_m);
+    ev.upper = uniform_vec(rng, e.upper_bound_min_m, e.upper_bound_max_m);
+    if (ev.layout_generation == 0 || ++ev.episodes_since_layout >= e.keep_same_env_for_num_episodes) {
+      generate_layout(ev);
+      ev.episodes_since_layout = 0;
+      ++ev.layout_generation;
+    }
+    ev.episode_step = 0;
+    const Vec3 lo = ev.lower, span = ev.upper - ev.lower;
+    const bool hover_task = cfg_.task.kind == TaskKind::hover;
+    for (int r = 0; r < robots_per_env_; ++r) {
+      const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+      const int attempts = cfg_.task.placement_attempts;
+      Vec3 starts[kMaxPlacementAttempts], targets[kMaxPlacementAttempts];
+      for (int k = 0; k < attempts; ++k) {
+        starts[k] = lo + uniform_vec(rng, cfg_.robot.min_init_position_ratio, cfg_.robot.max_init_position_ratio).cwiseProduct(span);
+        targets[k] = lo + uniform_vec(rng, cfg_.task.min_target_ratio, cfg_.task.max_target_ratio).cwiseProduct(span);
+      }
+      int chosen = -1, clear_start = -1;
+      for (int k = 0; k < attempts && chosen < 0; ++k) {
+        if (!clear_point(ev, starts[k][0], starts[k][1])) continue;
+        if (clear_start < 0) clear_start = k;
+        if (hover_task || (clear_point(ev, targets[k][0], targets[k][1]) &&
+                           (!cfg_.task.line_of_sight || clear_segment(ev, starts[k][0], starts[k][1], targets[k][0], targets[k][1]))))
+          chosen = k;
+      }
+      const bool fallback = chosen < 0;
+      if (fallback) {
+        chosen = clear_start >= 0 ? clear_start : 0;
+        ++ev.stats.placement_fallbacks;
+      }
+      const real yaw = rng.uniform(-cfg_.robot.max_init_yaw_rad, cfg_.robot.max_init_yaw_rad);
+      const Vec3 start = starts[chosen];
+      const Vec3 target = (hover_task || fallback) ? start : targets[chosen];
+      target_w_[3 * i] = target[0];
+      target_w_[3 * i + 1] = target[1];
+      target_w_[3 * i + 2] = plane_z_;
+      reset_controller(i, rng, true);
+      b2Body* b = ev.robots[static_cast<std::size_t>(r)];
+      apply_mass(b, i);
+      place_body(b, i, start[0], start[1], yaw, 0, 0, 0);
+      crashed_[i] = 0;
+      force_xy_[2 * i] = force_xy_[2 * i + 1] = normal_sum_[i] = 0;
+      real* a = &actions_[i * static_cast<std::size_t>(action_dim_)];
+      for (int k = 0; k < action_dim_; ++k) a[k] = 0;
+      if (!ground_ && cfg_.controller.kind == ControllerKind::lee_position) {
+        a[0] = target[0];
+        a[1] = target[1];
+        a[2] = plane_z_;
+      }
+    }
+    ++ev.stats.resets;
+    render_lidar(ei);
+  }
+
+  // ---- step --------------------------------------------------------------------------------
+  void env_physics(int ei) {
+    Env& ev = envs_[static_cast<std::size_t>(ei)];
+    const real dt = cfg_.sim.dt_s;
+    for (int r = 0; r < robots_per_env_; ++r) crashed_[static_cast<std::size_t>(ei * robots_per_env_ + r)] = 0;
+    for (int s = 0; s < decimation_; ++s) {
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+        if (ground_) drive(ev.robots[static_cast<std::size_t>(r)], i, dt);
+        else fly(ev.robots[static_cast<std::size_t>(r)], i, dt);
+        force_xy_[2 * i] = force_xy_[2 * i + 1] = normal_sum_[i] = 0;
+      }
+      ev.world->Step(static_cast<float>(dt), kVelocityIterations, kPositionIterations);
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+        if (normal_sum_[i] > cfg_.env.collision_force_threshold_N) crashed_[i] = 1;
+      }
+    }
+  }
+
+  /// Speed of the rear axle along the heading. Box2D integrates the centre of mass linearly while
+  /// the body turns, so reading the rear axle's velocity after a free step would add an O(dt)
+  /// artefact (w^2 |c - o| dt forwards, v w dt sideways) that the speed loop would fight. Instead:
+  /// the speed set last plus the change of the centre-of-mass velocity since it was set (zero in
+  /// free motion; what a contact or a push did otherwise), along the heading it was set with.
+  real measured_speed(const b2Body* b, std::size_t i) const {
+    const b2Vec2 v = b->GetLinearVelocity();
+    const real dvx = static_cast<real>(v.x) - kin_[5 * i + 1], dvy = static_cast<real>(v.y) - kin_[5 * i + 2];
+    return kin_[5 * i] + dvx * kin_[5 * i + 3] + dvy * kin_[5 * i + 4];
+  }
+  void remember_kinematics(const b2Body* b, std::size_t i, real speed, real c, real s) {
+    const b2Vec2 v = b->GetLinearVelocity();
+    kin_[5 * i] = speed;
+    kin_[5 * i + 1] = static_cast<real>(v.x);
+    kin_[5 * i + 2] = static_cast<real>(v.y);
+    kin_[5 * i + 3] = c;
+    kin_[5 * i + 4] = s;
+  }
+
+  void drive(b2Body* b, std::size_t i, real dt) {
+    const b2Vec2 o = b->GetPosition();
+    const float psi = b->GetAngle();
+    const real c = static_cast<real>(std::cos(psi)), s = static_cast<real>(std::sin(psi));
+    const real speed = measured_speed(b, i);
+    VelocitySteeringParams p = vs_;
+    p.max_accel_m_s2 *= motor_scale_[i];  // drive constant randomisation scales the available force
+    p.max_decel_m_s2 *= motor_scale_[i];
+    p.mass_kg = mass(i);
+    VelocitySteeringOutput out;
+    (void)update_velocity_steering(p, steer_[i], speed, &actions_[i * static_cast<std::size_t>(action_dim_)], dt, out);
+    const real w = out.yaw_rate_radps;
+    // Kinematic bicycle: the rear axle moves at v along the heading, the body turns at w; Box2D
+    // takes the centre of mass's velocity, v_o + w x (c - o).
+    const b2Vec2 cw = b->GetWorldCenter();
+    const real vx = out.speed_m_s * c - w * static_cast<real>(cw.y - o.y);
+    const real vy = out.speed_m_s * s + w * static_cast<real>(cw.x - o.x);
+    b->SetLinearVelocity(b2Vec2(static_cast<float>(vx), static_cast<float>(vy)));
+    b->SetAngularVelocity(static_cast<float>(w));
+    remember_kinematics(b, i, out.speed_m_s, c, s);
+    // Applied wrench in the body frame: drive force, the lateral force that keeps the car on its
+    // arc (m v w), and the yaw torque of the change of yaw rate.
+    wrench_b_[6 * i] = out.force_N;
+    wrench_b_[6 * i + 1] = mass(i) * out.speed_m_s * w;
+    wrench_b_[6 * i + 2] = wrench_b_[6 * i + 3] = wrench_b_[6 * i + 4] = 0;
+    wrench_b_[6 * i + 5] = static_cast<real>(b->GetInertia()) * (w - prev_omega_[i]) / dt;
+    prev_omega_[i] = w;
+  }
+
+  void fly(b2Body* b, std::size_t i, real dt) {
+    const b2Vec2 p = b->GetPosition(), v = b->GetLinearVelocity();
+    const float psi = b->GetAngle();
+    RigidBodyState st;  // the planar state lifted to 3-D at the flight altitude
+    st.position_w = Vec3(static_cast<real>(p.x), static_cast<real>(p.y), plane_z_);
+    st.orientation_wb = quat_from_euler_xyz(0, 0, static_cast<real>(psi));
+    st.linvel_w = Vec3(static_cast<real>(v.x), static_cast<real>(v.y), 0);
+    st.angvel_b = Vec3(0, 0, static_cast<real>(b->GetAngularVelocity()));
+    real action[kMaxActionDim] = {};
+    for (int k = 0; k < action_dim_; ++k) action[k] = actions_[i * static_cast<std::size_t>(action_dim_) + static_cast<std::size_t>(k)];
+    ControllerOutput out;
+    (void)update_controller(cfg_.controller.kind, ctrl_, lee_[i], st, action, kMaxActionDim, out);
+    const real m = mass(i);
+    const Vec3 a_cmd = lee_[i].lee.accel_command_w;
+    const Vec3 f_des = m * (a_cmd - ctrl_.lee.gravity_w);
+    Wrench cmd;
+    cmd.force_b = Vec3(0, 0, f_des.norm());
+    cmd.torque_b = Vec3(0, 0, out.wrench_b.torque_b[2]);
+    al::AllocationResult alloc;
+    (void)al::allocate_sequential_desaturation(alloc_model_, desat_, alloc_[i], cmd, alloc);
+    (void)al::motor_model_step(motor_cfg_, motors_[i], alloc.thrust_N, dt);
+    const Vec6 w = al::wrench_from_thrusts(airframe_.effectiveness, airframe_.num_rotors, motors_[i].thrust_N);
+    const real thrust = w[2], weight = m * kStandardGravity;
+    const real h_avail = thrust > weight ? std::sqrt(thrust * thrust - weight * weight) : 0_r;
+    real fx = m * a_cmd[0], fy = m * a_cmd[1];
+    const real fh = std::sqrt(fx * fx + fy * fy);
+    if (fh > h_avail && fh > 0) {
+      fx *= h_avail / fh;
+      fy *= h_avail / fh;
+    }
+    b->ApplyForceToCenter(b2Vec2(static_cast<float>(fx), static_cast<float>(fy)), true);
+    b->ApplyTorque(static_cast<float>(w[5]), true);
+    const Vec3 fb = rotate_inverse(st.orientation_wb, Vec3(fx, fy, 0));
+    wrench_b_[6 * i] = fb[0];
+    wrench_b_[6 * i + 1] = fb[1];
+    wrench_b_[6 * i + 2] = thrust;
+    wrench_b_[6 * i + 3] = w[3];
+    wrench_b_[6 * i + 4] = w[4];
+    wrench_b_[6 * i + 5] = w[5];
+  }
+
+  real distance_to_target(int ei, int r) const {
+    const b2Vec2 p = envs_[static_cast<std::size_t>(ei)].robots[static_cast<std::size_t>(r)]->GetPosition();
+    const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+    const real dx = target_w_[3 * i] - static_cast<real>(p.x), dy = target_w_[3 * i + 1] - static_cast<real>(p.y);
+    return std::sqrt(dx * dx + dy * dy);
+  }
+
+  /// Episode bookkeeping after the physics (World::env_step's rules): crash, exit, timeout,
+  /// success at timeout; auto-reset of an ended episode.
+  void env_post(int ei) {
+    Env& ev = envs_[static_cast<std::size_t>(ei)];
+    EnvStats& es = ev.stats;
+    ++es.env_steps;
+    bool any_crash = false, out = false;
+    real err = 0;
+    for (int r = 0; r < robots_per_env_; ++r) {
+      const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+      any_crash = any_crash || crashed_[i] != 0;
+      const b2Vec2 p = ev.robots[static_cast<std::size_t>(r)]->GetPosition();
+      const real px = static_cast<real>(p.x), py = static_cast<real>(p.y);
+      out = out || !(px >= ev.lower[0] - 0.5_r && px <= ev.upper[0] + 0.5_r && py >= ev.lower[1] - 0.5_r && py <= ev.upper[1] + 0.5_r);
+      err += distance_to_target(ei, r);
+    }
+    es.tracking_error_sum_m += static_cast<double>(err);
+    if (any_crash) ++es.crashes;
+    const bool timeout = ++ev.episode_step >= cfg_.task.episode_len_env_steps;
+    if (timeout) {
+      ++es.timeouts;
+      bool ok = true;
+      for (int r = 0; r < robots_per_env_; ++r) ok = ok && distance_to_target(ei, r) <= cfg_.task.success_radius_m;
+      es.successes += ok ? 1u : 0u;
+    }
+    if (out) ++es.out_of_bounds;
+    const bool done = timeout || out || (any_crash && cfg_.env.reset_on_collision);
+    reset_buf_[static_cast<std::size_t>(ei)] = done ? 1 : 0;
+    if (done) {
+      ++es.episodes_done;
+      real d = 0;
+      for (int r = 0; r < robots_per_env_; ++r) d += distance_to_target(ei, r);
+      es.final_distance_sum_m += static_cast<double>(d) / robots_per_env_;
+      reset_env(ei);  // renders the new episode's first scan
+      return;
+    }
+    render_lidar(ei);
+  }
+
+  void render_lidar(int ei) {
+    if (lidar_beams_ == 0) return;
+    Env& ev = envs_[static_cast<std::size_t>(ei)];
+    const real range = cfg_.simulator.lidar_max_range_m;
+    for (int r = 0; r < robots_per_env_; ++r) {
+      const b2Body* b = ev.robots[static_cast<std::size_t>(r)];
+      const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+      // The lidar sits at the footprint's centre (the box centre of the car, the multirotor's centre).
+      const b2Vec2 origin = b->GetWorldPoint(b2Vec2(ground_ ? static_cast<float>(vs_.wheelbase_m / 2) : 0.0f, 0.0f));
+      const real psi = static_cast<real>(b->GetAngle());
+      for (int k = 0; k < lidar_beams_; ++k) {
+        real s = 0, c = 1;
+        sin_cos(psi + lidar_beam_angle(k), s, c);
+        const b2Vec2 end(origin.x + static_cast<float>(range * c), origin.y + static_cast<float>(range * s));
+        ClosestHit cb;
+        cb.ignore = b;
+        ev.world->RayCast(&cb, origin, end);
+        lidar_[i * static_cast<std::size_t>(lidar_beams_) + static_cast<std::size_t>(k)] = cb.hit ? static_cast<real>(cb.fraction) * range : range;
+      }
+    }
+  }
+
+  void refresh_robot(int ei, int r) {
+    const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
+    const b2Body* b = envs_[static_cast<std::size_t>(ei)].robots[static_cast<std::size_t>(r)];
+    RigidBodyState s;
+    const b2Vec2 p = b->GetPosition();
+    s.position_w = Vec3(static_cast<real>(p.x), static_cast<real>(p.y), plane_z_);
+    s.orientation_wb = quat_from_euler_xyz(0, 0, static_cast<real>(b->GetAngle()));
+    if (ground_) {
+      // No-slip kinematic model: the rear axle moves along the heading (measured_speed).
+      real sn = 0, cs = 1;
+      sin_cos(static_cast<real>(b->GetAngle()), sn, cs);
+      const real v = measured_speed(b, i);
+      s.linvel_w = Vec3(v * cs, v * sn, 0);
+    } else {
+      const b2Vec2 v = b->GetLinearVelocityFromLocalPoint(b2Vec2(0, 0));  // the body origin (CoM bias aside)
+      s.linvel_w = Vec3(static_cast<real>(v.x), static_cast<real>(v.y), 0);
+    }
+    s.angvel_b = Vec3(0, 0, static_cast<real>(b->GetAngularVelocity()));
+    write_state_view(i, s);
+    contact_w_[3 * i] = force_xy_[2 * i];
+    contact_w_[3 * i + 1] = force_xy_[2 * i + 1];
+    contact_w_[3 * i + 2] = 0;
+  }
+
+  void refresh_all() {
+    for (int ei = 0; ei < num_envs_; ++ei)
+      for (int r = 0; r < robots_per_env_; ++r) refresh_robot(ei, r);
+  }
+
+  bool ground_ = true;
+  std::string controller_;
+  VelocitySteeringParams vs_;
+  ControllerParams ctrl_;
+  al::Airframe airframe_;
+  al::AllocationModel alloc_model_;
+  al::SequentialDesaturationParams desat_;
+  al::MotorModelConfig motor_cfg_;
+  real half_x_ = 0, half_y_ = 0, radius_ = 0, bound_r_ = 0, plane_z_ = 0;
+  std::vector<VelocitySteeringState> steer_;
+  std::vector<ControllerState> lee_;
+  std::vector<al::AllocatorState> alloc_;
+  std::vector<al::MotorModelState> motors_;
+  std::vector<real> force_xy_, normal_sum_, prev_omega_;
+  std::vector<real> kin_;  // (robots x 5) ground vehicle: speed set, COM velocity set (x, y), heading (cos, sin)
+  std::unique_ptr<unsigned char[]> arena_storage_;  // declared before envs_: destroyed after the worlds
+  std::vector<Env> envs_;
+  std::unique_ptr<ThreadPool> pool_;
+  Phase phase_ = Phase::physics;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulator> make_planar_simulator(const WorldConfig& config, std::string& error) {
+  std::unique_ptr<PlanarSimulator> s(new PlanarSimulator());
+  if (!s->init(config, error)) return nullptr;
+  return s;
+}
+
+}  // namespace kestrel::sim

@@ -1,0 +1,228 @@
+// The Simulator interface: backend selection, shared views, push_robots, the scripted setpoint
+// policy and the registry entries. The backends live in simulator_rigid.cpp and planar.cpp.
+#include "kestrel/sim/simulator.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "kestrel/controllers/velocity_steering.hpp"
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/registry.hpp"
+
+namespace kestrel::sim {
+
+std::unique_ptr<Simulator> make_rigid_simulator(const WorldConfig& config, std::string& error);
+std::unique_ptr<Simulator> make_planar_simulator(const WorldConfig& config, std::string& error);
+
+const char* backend_name(Backend b) { return b == Backend::planar ? "planar" : "rigid"; }
+
+bool backend_from_name(const std::string& name, Backend& out) {
+  if (name == "rigid") out = Backend::rigid;
+  else if (name == "planar") out = Backend::planar;
+  else return false;
+  return true;
+}
+
+bool resolve_backend(const WorldConfig& config, Backend& out, std::string& error) {
+  const char* env = std::getenv("KESTREL_SIMULATOR");
+  if (env != nullptr && env[0] != '\0') {
+    if (backend_from_name(env, out)) return true;
+    error = std::string("KESTREL_SIMULATOR: unknown simulator \"") + env + "\"; allowed: rigid, planar";
+    return false;
+  }
+  if (config.simulator.backend.empty()) {
+    out = Backend::rigid;
+    return true;
+  }
+  if (backend_from_name(config.simulator.backend, out)) return true;
+  error = "simulator: unknown simulator \"" + config.simulator.backend + "\"; allowed: rigid, planar";
+  return false;
+}
+
+std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, Backend backend, std::string& error) {
+  return backend == Backend::planar ? make_planar_simulator(config, error) : make_rigid_simulator(config, error);
+}
+
+std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, std::string& error) {
+  Backend b = Backend::rigid;
+  if (!resolve_backend(config, b, error)) return nullptr;
+  return make_simulator(config, b, error);
+}
+
+Simulator::~Simulator() = default;
+
+void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar_beams) {
+  cfg_ = cfg;
+  num_envs_ = cfg.env.num_envs;
+  robots_per_env_ = cfg.robot.robots_per_env;
+  action_dim_ = action_dim;
+  decimation_ = std::max(1, static_cast<int>(std::floor(cfg.env.num_physics_steps_per_env_step_mean + 0.5_r)));
+  lidar_beams_ = lidar_beams;
+  const std::size_t n = static_cast<std::size_t>(num_robots());
+  actions_.assign(n * static_cast<std::size_t>(action_dim), 0);
+  pos_w_.assign(3 * n, 0);
+  quat_xyzw_.assign(4 * n, 0);
+  euler_xyz_.assign(3 * n, 0);
+  lin_vel_b_.assign(3 * n, 0);
+  ang_vel_b_.assign(3 * n, 0);
+  contact_w_.assign(3 * n, 0);
+  wrench_b_.assign(6 * n, 0);
+  target_w_.assign(3 * n, 0);
+  crashed_.assign(n, 0);
+  reset_buf_.assign(static_cast<std::size_t>(num_envs_), 0);
+  added_mass_kg_.assign(n, 0);
+  com_bias_b_m_.assign(3 * n, 0);
+  motor_scale_.assign(n, 1);
+  gain_scale_.assign(n, 1);
+  lidar_.assign(n * static_cast<std::size_t>(lidar_beams), 0);
+  rng_push_.resize(static_cast<std::size_t>(num_envs_));
+  for (int e = 0; e < num_envs_; ++e) rng_push_[static_cast<std::size_t>(e)] = RngStream(cfg.seed, static_cast<std::uint32_t>(e), kPurposePush);
+}
+
+void Simulator::write_state_view(std::size_t i, const RigidBodyState& s) {
+  for (int k = 0; k < 3; ++k) pos_w_[3 * i + k] = s.position_w[k];
+  const auto& c = s.orientation_wb.coeffs();  // Eigen stores x, y, z, w
+  for (int k = 0; k < 4; ++k) quat_xyzw_[4 * i + k] = c[k];
+  const Vec3 e = euler_xyz_two_pi(s.orientation_wb);
+  for (int k = 0; k < 3; ++k) euler_xyz_[3 * i + k] = wrap_pi(e[k]);
+  const Vec3 vb = rotate_inverse(s.orientation_wb, s.linvel_w);
+  for (int k = 0; k < 3; ++k) lin_vel_b_[3 * i + k] = vb[k];
+  for (int k = 0; k < 3; ++k) ang_vel_b_[3 * i + k] = s.angvel_b[k];
+}
+
+void Simulator::step(const real* actions) {
+  actions_given_ = actions != nullptr;
+  if (actions != nullptr) std::copy(actions, actions + actions_.size(), actions_.begin());
+  advance();
+  post_physics_step();
+}
+
+void Simulator::push_robots() {
+  const real m = cfg_.simulator.max_push_vel_xy_m_s;
+  for (int e = 0; e < num_envs_; ++e) {
+    RngStream& rng = rng_push_[static_cast<std::size_t>(e)];
+    for (int r = 0; r < robots_per_env_; ++r) {
+      // Two draws per robot always, so the stream position does not depend on the values.
+      const real vx = rng.uniform(-m, m), vy = rng.uniform(-m, m);
+      set_velocity_xy(e, r, vx, vy);
+    }
+  }
+}
+
+real Simulator::lidar_beam_angle(int k) const {
+  if (lidar_beams_ <= 1) return 0;
+  const real fov = cfg_.simulator.lidar_fov_rad;
+  return -fov / 2 + fov * static_cast<real>(k) / static_cast<real>(lidar_beams_ - 1);
+}
+
+void scripted_setpoint_actions(const Simulator& sim, real* actions) {
+  const int n = sim.num_robots(), ad = sim.action_dim();
+  const real* p = sim.base_pos_w();
+  const real* t = sim.target_w();
+  const real* eul = sim.base_euler_xyz();
+  const bool ground = sim.ground_vehicle();
+  for (int i = 0; i < n; ++i) {
+    real* a = actions + static_cast<std::size_t>(i) * static_cast<std::size_t>(ad);
+    for (int k = 0; k < ad; ++k) a[k] = 0;
+    if (ground) {
+      const SimulatorConfig& sc = sim.config().simulator;
+      const real dx = t[3 * i] - p[3 * i], dy = t[3 * i + 1] - p[3 * i + 1];
+      const real d = std::sqrt(dx * dx + dy * dy);
+      // Pure pursuit of the look-ahead point at ld = min(d, 1 m) on the straight line to the
+      // target (the line the placement checked for obstacles): the arc through the rear axle
+      // tangent to the heading and through that point has curvature 2 sin(alpha) / ld.
+      const real alpha = wrap_pi(std::atan2(dy, dx) - eul[3 * i + 2]);
+      // A target behind (|alpha| > 90 deg): pure pursuit's sin(alpha) shrinks towards 0 there and
+      // would drive away; turn at full lock towards it instead.
+      // A target inside the minimum turning circle (required curvature 2 sin(alpha) / d above
+      // tan(max_steering) / L) cannot be reached forwards: back up at opposite lock, which turns
+      // the nose towards it.
+      const real side = alpha >= 0 ? 1_r : -1_r;
+      const real kappa_max = std::tan(sc.max_steering_rad) / sc.wheelbase_m;
+      const bool unreachable = d > 1e-3_r && std::fabs(2 * std::sin(alpha) / d) > kappa_max;
+      real v = 0, delta = 0;
+      if (unreachable && d < 2 / kappa_max) {
+        v = -0.5_r;
+        delta = -side * sc.max_steering_rad;
+      } else if (std::fabs(alpha) > kPi / 2) {
+        v = 0.5_r * std::min(sc.max_speed_m_s, 0.8_r * d);
+        delta = side * sc.max_steering_rad;
+      } else {
+        // Speed tapers to zero near the target (stop on it); slower in sharp turns.
+        v = std::min(sc.max_speed_m_s, 0.8_r * d) * (std::fabs(alpha) > 1.2_r ? 0.5_r : 1_r);
+        const real ld = std::min(d, 1_r);
+        delta = ld > 1e-3_r ? std::atan(2 * sc.wheelbase_m * std::sin(alpha) / ld) : 0_r;
+      }
+      a[0] = v;
+      a[1] = clamp(delta, -sc.max_steering_rad, sc.max_steering_rad);
+    } else if (std::strcmp(sim.controller_name(), "lee_position_control") == 0) {
+      for (int k = 0; k < 3 && k < ad; ++k) a[k] = t[3 * i + k];
+    }
+  }
+}
+
+namespace {
+AssetClass planar_asset(const char* name, AssetKind kind, int n, int semantic, real min_size, real max_size) {
+  AssetClass c;
+  c.name = name;
+  c.kind = kind;
+  c.num_assets = n;
+  c.min_num_assets = n / 2;
+  c.semantic_id = semantic;
+  c.min_size_m = Vec3::Constant(min_size);
+  c.max_size_m = Vec3::Constant(max_size);
+  c.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.5_r);
+  c.max_position_ratio = Vec3(0.7_r, 0.95_r, 0.5_r);
+  c.max_euler_rad = Vec3(0, 0, kPi);  // yaw only: planar boxes
+  return c;
+}
+}  // namespace
+
+void register_simulators(Registries& r) {
+  r.simulators.add("rigid", "3-D World: Newton-Euler bodies, libccd/analytic collision, penalty contact (default)", [] {
+    SimulatorConfig c;
+    c.backend = "rigid";
+    return c;
+  });
+  r.simulators.add("planar", "Box2D 2.4 plane: ground vehicle (velocity + steering, bicycle model) or fixed-altitude multirotor",
+                   [] {
+                     SimulatorConfig c;
+                     c.backend = "planar";
+                     return c;
+                   });
+  r.envs.add("planar_obstacles", "12 x 12 m yard: bounding walls, 8 round pillars, 6 yaw-rotated boxes (planar or rigid)", [] {
+    EnvConfig e;
+    e.name = "planar_obstacles";
+    e.lower_bound_min_m = Vec3(-6, -6, 0);
+    e.lower_bound_max_m = Vec3(-6, -6, 0);
+    e.upper_bound_min_m = Vec3(6, 6, 2);
+    e.upper_bound_max_m = Vec3(6, 6, 2);
+    AssetClass walls = planar_asset("walls", AssetKind::wall, 5, 8, 0, 0);
+    walls.keep_in_env = true;
+    walls.min_num_assets = 5;
+    e.assets.push_back(walls);
+    AssetClass pillars = planar_asset("pillars", AssetKind::thin, 8, 6, 0.15_r, 0.35_r);
+    pillars.min_size_m[2] = pillars.max_size_m[2] = 2;  // full height (a cylinder of 2 m on rigid)
+    e.assets.push_back(pillars);
+    e.assets.push_back(planar_asset("boxes", AssetKind::cube, 6, 2, 0.4_r, 0.9_r));
+    return e;
+  });
+  r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
+    RobotConfig c;
+    c.name = "ground_vehicle";
+    c.mass_kg = 3.5_r;
+    c.inertia_diag_kg_m2 = Vec3(0.03_r, 0.08_r, 0.1_r);
+    c.shape.type = ShapeType::box;
+    c.shape.half_extents_m = Vec3(0.25_r, 0.15_r, 0.1_r);
+    c.min_init_position_ratio = Vec3(0.05_r, 0.1_r, 0);
+    c.max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0);
+    // Starts facing into the yard (+-90 deg of +x): a car cannot turn on the spot, and a U-turn
+    // (radius L / tan(0.4) = 0.78 m plus the body) next to the start wall often hits it.
+    c.max_init_yaw_rad = kPi / 2;
+    return c;
+  });
+}
+
+}  // namespace kestrel::sim

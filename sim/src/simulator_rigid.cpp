@@ -1,0 +1,203 @@
+// Backend `rigid`: the 3-D batched World (sim/world.hpp) behind the Simulator interface. The World
+// keeps its own episode logic (auto-reset on timeout, exit or crash, task targets); this class
+// copies actions in, steps it, and exposes its state as the interface's flat views.
+#include <cmath>
+
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/simulator.hpp"
+
+namespace kestrel::sim {
+
+namespace al = kestrel::allocation;
+
+namespace {
+
+class RigidSimulator final : public Simulator {
+ public:
+  RigidSimulator() : Simulator(Backend::rigid) {}
+
+  bool init(const WorldConfig& config, std::string& error) {
+    if (config.robot.name == "ground_vehicle") {
+      error = "simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar";
+      return false;
+    }
+    if (config.simulator.added_mass_max_kg != 0 || config.simulator.added_mass_min_kg != 0 || config.simulator.com_bias_max_m != 0 ||
+        config.simulator.motor_scale_min != 1 || config.simulator.motor_scale_max != 1 || config.simulator.gain_scale_min != 1 ||
+        config.simulator.gain_scale_max != 1) {
+      error = "simulator rigid: added-mass, centre-of-mass, motor and gain-scale randomisation ranges are planar-only (the "
+              "World has one body model per world; it randomises motors through the motor model and gains through "
+              "controller.randomize_gains); use simulator: planar";
+      return false;
+    }
+    if (config.simulator.lidar_beams != 0) {
+      error = "simulator rigid: simulator.lidar_beams is the planar 2-D lidar; on rigid attach a lidar through `sensors:`";
+      return false;
+    }
+    world_ = World::create(config, error);
+    if (!world_) return false;
+    allocate_views(config, static_cast<int>(controller_action_dim(config.controller.kind, world_->controller_params())), 0);
+    nominal_ = lee_nominal_gains(world_->controller_params().lee.gain_ranges);
+    // The actions the World set at its first reset (target setpoints) are the initial actions.
+    for (int i = 0; i < num_robots(); ++i)
+      for (int k = 0; k < action_dim_; ++k)
+        actions_[static_cast<std::size_t>(i * action_dim_ + k)] = world_->action(i / robots_per_env_, i % robots_per_env_)[k];
+    refresh();
+    return true;
+  }
+
+  int num_threads() const override { return world_->num_threads(); }
+  const char* controller_name() const override { return cfg_.controller.name.c_str(); }
+  World* world() override { return world_.get(); }
+
+  void post_physics_step() override {
+    for (int e = 0; e < num_envs_; ++e) {
+      // The World resets an ended episode inside its step (auto-reset), which leaves the
+      // environment at episode step 0.
+      const bool reset = world_->episode_step(e) == 0;
+      reset_buf_[static_cast<std::size_t>(e)] = reset ? 1 : 0;
+      if (!reset) continue;
+      // The new episode's actions (its target setpoint) become the current ones.
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = static_cast<std::size_t>(e * robots_per_env_ + r);
+        for (int j = 0; j < action_dim_; ++j)
+          actions_[i * static_cast<std::size_t>(action_dim_) + static_cast<std::size_t>(j)] = world_->action(e, r)[j];
+      }
+    }
+    refresh();
+  }
+
+  void reset_idx(const int* env_ids, int count) override {
+    for (int k = 0; k < count; ++k) {
+      const int e = env_ids[k];
+      if (e < 0 || e >= num_envs_) continue;
+      world_->reset_env(e);
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = static_cast<std::size_t>(e * robots_per_env_ + r);
+        for (int j = 0; j < action_dim_; ++j) actions_[i * static_cast<std::size_t>(action_dim_) + static_cast<std::size_t>(j)] = world_->action(e, r)[j];
+      }
+    }
+    refresh();
+  }
+
+  bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
+                         const real* ang_vel_w) override {
+    // Validate everything first: nothing is written unless every row is good.
+    const int rows = count * robots_per_env_;
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] < 0 || env_ids[k] >= num_envs_) return fail("simulator rigid: reset_root_states: env id " + std::to_string(env_ids[k]) + " out of range");
+    for (int j = 0; j < rows; ++j) {
+      if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
+          !all_finite(ang_vel_w + 3 * j, 3))
+        return fail("simulator rigid: reset_root_states: non-finite value in row " + std::to_string(j));
+      const real* q = quat_xyzw + 4 * j;
+      const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+      if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail("simulator rigid: reset_root_states: quaternion of row " + std::to_string(j) + " is not unit length");
+    }
+    for (int k = 0; k < count; ++k) {
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const int j = k * robots_per_env_ + r;
+        RigidBodyState s;
+        s.position_w = Vec3(pos_w[3 * j], pos_w[3 * j + 1], pos_w[3 * j + 2]);
+        s.orientation_wb = quat_from_xyzw(quat_xyzw[4 * j], quat_xyzw[4 * j + 1], quat_xyzw[4 * j + 2], quat_xyzw[4 * j + 3]);
+        s.linvel_w = Vec3(lin_vel_w[3 * j], lin_vel_w[3 * j + 1], lin_vel_w[3 * j + 2]);
+        // The interface takes the world-frame angular velocity (legged_gym's root state); the
+        // World keeps it in the body frame.
+        s.angvel_b = rotate_inverse(s.orientation_wb, Vec3(ang_vel_w[3 * j], ang_vel_w[3 * j + 1], ang_vel_w[3 * j + 2]));
+        world_->set_root_state(env_ids[k], r, s);
+      }
+    }
+    refresh();
+    return true;
+  }
+
+  void update_sensors() override {
+    for (int e = 0; e < num_envs_; ++e) world_->render_sensors(e);
+  }
+
+  WorldSummary summary() const override { return world_->summary(); }
+  std::uint64_t state_hash() const override { return world_->state_hash(); }
+
+ protected:
+  void advance() override {
+    if (!actions_given_) {
+      world_->step(1);
+      return;
+    }
+    for (int i = 0; i < num_robots(); ++i) {
+      real* a = world_->action(i / robots_per_env_, i % robots_per_env_);
+      for (int k = 0; k < action_dim_; ++k) a[k] = actions_[static_cast<std::size_t>(i * action_dim_ + k)];
+    }
+    world_->step(1);
+  }
+
+  void set_velocity_xy(int env, int robot, real vx, real vy) override {
+    RigidBodyState s = world_->robot_state(env, robot);
+    s.linvel_w[0] = vx;
+    s.linvel_w[1] = vy;
+    world_->robot_state(env, robot) = s;  // contact state kept: a push is not a teleport
+    write_state_view(static_cast<std::size_t>(env * robots_per_env_ + robot), s);
+  }
+
+ private:
+  void refresh() {
+    const al::Airframe& af = world_->airframe();
+    const al::MotorModelConfig& mc = world_->motor_config();
+    const real tau_nominal = (mc.time_constant_increasing_min_s + mc.time_constant_increasing_max_s) / 2;
+    for (int e = 0; e < num_envs_; ++e) {
+      for (int r = 0; r < robots_per_env_; ++r) {
+        const std::size_t i = static_cast<std::size_t>(e * robots_per_env_ + r);
+        const RigidBodyState& s = world_->robot_state(e, r);
+        write_state_view(i, s);
+        const Vec3& f = world_->contact_force_w(e, r);
+        for (int k = 0; k < 3; ++k) contact_w_[3 * i + k] = f[k];
+        // Applied wrench: motor thrusts through the effectiveness matrix plus the contact wrench
+        // the next physics step applies (the random disturbance, when enabled, is not included).
+        const al::MotorModelState& m = world_->motor_state(e, r);
+        const Vec6 w = al::wrench_from_thrusts(af.effectiveness, af.num_rotors, m.thrust_N);
+        const Vec3 fb = rotate_inverse(s.orientation_wb, f);
+        const Vec3& tb = world_->contact_torque_b(e, r);
+        for (int k = 0; k < 3; ++k) {
+          wrench_b_[6 * i + k] = w[k] + fb[k];
+          wrench_b_[6 * i + 3 + k] = w[3 + k] + tb[k];
+        }
+        const Vec3& t = world_->target(e, r);
+        for (int k = 0; k < 3; ++k) target_w_[3 * i + k] = t[k];
+        crashed_[i] = world_->crashed(e, r) ? 1 : 0;
+        // Domain randomisation the World does: motor time constants (motor model reset) and Lee
+        // gains (controller.randomize_gains). Mass and centre of mass are fixed per world.
+        real tau = 0;
+        for (int k = 0; k < af.num_rotors; ++k) tau += m.time_constant_increasing_s[k];
+        motor_scale_[i] = af.num_rotors > 0 && tau_nominal > 0 ? tau / static_cast<real>(af.num_rotors) / tau_nominal : 1;
+        gain_scale_[i] = gain_ratio(world_->controller_state(e, r).lee.gains);
+      }
+    }
+  }
+
+  real gain_ratio(const LeeGains& g) const {
+    real sum = 0;
+    int n = 0;
+    const Vec3* a[4] = {&g.k_pos, &g.k_vel, &g.k_rot, &g.k_angvel};
+    const Vec3* b[4] = {&nominal_.k_pos, &nominal_.k_vel, &nominal_.k_rot, &nominal_.k_angvel};
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 3; ++k)
+        if ((*b[j])[k] != 0) {
+          sum += (*a[j])[k] / (*b[j])[k];
+          ++n;
+        }
+    return n > 0 ? sum / static_cast<real>(n) : 1;
+  }
+
+  std::unique_ptr<World> world_;
+  LeeGains nominal_;
+};
+
+}  // namespace
+
+std::unique_ptr<Simulator> make_rigid_simulator(const WorldConfig& config, std::string& error) {
+  std::unique_ptr<RigidSimulator> s(new RigidSimulator());
+  if (!s->init(config, error)) return nullptr;
+  return s;
+}
+
+}  // namespace kestrel::sim

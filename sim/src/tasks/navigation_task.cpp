@@ -1,0 +1,341 @@
+// navigation_task (see navigation_task.hpp for what follows Aerial Gym's navigation_task.py and
+// what differs).
+#include "kestrel/sim/navigation_task.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kestrel/kernel/quaternion.hpp"
+#include "task_access.hpp"
+
+namespace kestrel::sim {
+
+namespace {
+
+constexpr int kNavActionDim = 4;
+constexpr int kNavStateObs = 17;  // goal direction (3), distance, roll, pitch, 0, v_b (3), w_b (3), actions (4)
+
+// The reference's exponential_reward_function / exponential_penalty_function.
+float exp_reward(float magnitude, float exponent, float v) { return magnitude * std::exp(-(v * v) * exponent); }
+float exp_penalty(float magnitude, float exponent, float v) { return magnitude * (std::exp(-(v * v) * exponent) - 1.0f); }
+
+float norm3(const float v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+}  // namespace
+
+float navigation_reward(const float e[3], const float e_prev[3], bool crash, const float a[4], const float a_prev[4],
+                        float progress, const NavigationRewardParams& p) {
+  if (crash) return p.collision_penalty;
+  const float mult = 1.0f + 2.0f * progress;
+  const float dist = norm3(e), prev_dist = norm3(e_prev);
+  const float pos_reward = exp_reward(p.pos_reward_magnitude, p.pos_reward_exponent, dist);
+  const float very_close = exp_reward(p.very_close_to_goal_reward_magnitude, p.very_close_to_goal_reward_exponent, dist);
+  const float closer = prev_dist - dist;
+  const float closer_reward = closer > 0 ? p.getting_closer_reward_multiplier * closer
+                                         : 2.0f * p.getting_closer_reward_multiplier * closer;
+  const float distance_reward = (20.0f - dist) / 20.0f;
+  const float dx = a[0] - a_prev[0], dz = a[2] - a_prev[2], dyaw = a[3] - a_prev[3];
+  const float diff_penalty = exp_penalty(p.x_action_diff_penalty_magnitude, p.x_action_diff_penalty_exponent, dx) +
+                             exp_penalty(p.z_action_diff_penalty_magnitude, p.z_action_diff_penalty_exponent, dz) +
+                             exp_penalty(p.yawrate_action_diff_penalty_magnitude, p.yawrate_action_diff_penalty_exponent, dyaw);
+  const float abs_penalty =
+      progress * exp_penalty(p.x_absolute_action_penalty_magnitude, p.x_absolute_action_penalty_exponent, a[0]) +
+      progress * exp_penalty(p.z_absolute_action_penalty_magnitude, p.z_absolute_action_penalty_exponent, a[2]) +
+      progress * exp_penalty(p.yawrate_absolute_action_penalty_magnitude, p.yawrate_absolute_action_penalty_exponent, a[3]);
+  return mult * (pos_reward + very_close + closer_reward + distance_reward) + (diff_penalty + abs_penalty);
+}
+
+int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level) {
+  // Compared in float32, as the reference's tensor comparison is.
+  const float rate = static_cast<float>(success_rate);
+  if (rate > c.success_rate_for_increase) level += c.increase_step;
+  else if (rate < c.success_rate_for_decrease) level -= c.decrease_step;
+  return std::min(std::max(level, c.min_level), c.max_level);
+}
+
+int navigation_obs_dim(const NavigationParams& p) { return kNavStateObs + p.pool_rows * p.pool_cols; }
+
+namespace {
+
+class NavigationTask final : public Task {
+ public:
+  NavigationTask(std::unique_ptr<World> w, const NavigationParams& p, int sensor)
+      : Task(std::move(w), navigation_obs_dim(p), kNavActionDim), p_(p), sensor_(sensor) {
+    world_->set_auto_reset(false);
+    const std::size_t n = static_cast<std::size_t>(num_envs_);
+    episode_reward_.assign(n, 0.0);
+    err_prev_.assign(n * 3, 0.0f);
+    action_.assign(n * kNavActionDim, 0.0f);
+    action_prev_.assign(n * kNavActionDim, 0.0f);
+    ended_.assign(n, 0);
+    const SensorConfig& sc = world_->sensor_config(sensor_);
+    const sensors::RangeOutputParams& rp = sc.kind == SensorKind::camera ? sc.camera.range : sc.lidar.range;
+    max_range_m_ = rp.normalize_range ? 1 : rp.max_range;  // normalised images are already in [0, 1]
+    len_ = world_->config().task.episode_len_env_steps;
+    success_radius_m_ = static_cast<float>(world_->config().task.success_radius_m);
+    level_ = std::min(std::max(p_.curriculum.start_level, p_.curriculum.min_level), p_.curriculum.max_level);
+    apply_level();
+    reset();
+  }
+
+  const char* name() const override { return "navigation_task"; }
+
+  void reset() override {
+    for (int env = 0; env < num_envs_; ++env) reset_one(env);
+  }
+
+  void reset_idx(const int* env_ids, int count) override {
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
+  }
+
+  void step(const float* actions) override {
+    for (int env = 0; env < num_envs_; ++env) {
+      const float* in = actions + static_cast<std::size_t>(env) * kNavActionDim;
+      float* cur = &action_[static_cast<std::size_t>(env) * kNavActionDim];
+      float* prev = &action_prev_[static_cast<std::size_t>(env) * kNavActionDim];
+      real a[kNavActionDim];
+      for (int k = 0; k < kNavActionDim; ++k) {
+        prev[k] = cur[k];
+        // clamp(-1, 1) then scale; a NaN action becomes 0 (never reaches the controller).
+        const float c = in[k] >= -1.0f && in[k] <= 1.0f ? in[k] : (in[k] > 1.0f ? 1.0f : (in[k] < -1.0f ? -1.0f : 0.0f));
+        cur[k] = c * (k < 3 ? p_.max_speed_m_s : p_.max_yaw_rate_rad_s);
+        a[k] = static_cast<real>(cur[k]);
+      }
+      task_access::set_action(*world_, env, a, kNavActionDim);
+    }
+    world_->step(1);
+    ++infos_.steps;
+    const float progress = progress_fraction();
+    for (int env = 0; env < num_envs_; ++env) {
+      const std::size_t i = static_cast<std::size_t>(env);
+      float e_v[3];
+      goal_error_vehicle(env, e_v);
+      const bool crash = task_access::contact_crash(*world_, env) || task_access::out_of_bounds(*world_, env);
+      const float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
+                                        &action_prev_[i * kNavActionDim], progress, p_.reward);
+      for (int k = 0; k < 3; ++k) err_prev_[i * 3 + k] = e_v[k];
+      const bool success = !crash && norm3(e_v) < success_radius_m_;
+      const bool trunc = !crash && !success && world_->episode_step(env) >= len_;
+      rewards_[i] = r;
+      terminations_[i] = (crash || success) ? 1 : 0;
+      truncations_[i] = trunc ? 1 : 0;
+      episode_reward_[i] += static_cast<double>(r);
+      ended_[i] = (crash || success || trunc) ? 1 : 0;
+      if (!ended_[i]) continue;
+      ++infos_.episodes;
+      infos_.episode_reward_sum += episode_reward_[i];
+      if (crash) {
+        ++infos_.terminations;
+        ++infos_.crashes;
+        ++window_crashes_;
+      } else if (success) {
+        ++infos_.terminations;
+        ++infos_.successes;
+        ++window_successes_;
+      } else {
+        ++infos_.truncations;
+        ++window_timeouts_;
+      }
+    }
+    // Curriculum before the resets, as the reference updates it before post_reward_calculation_step:
+    // the environments ending now get their next layout at the new level.
+    const int instances = window_successes_ + window_crashes_ + window_timeouts_;
+    if (instances >= p_.curriculum.check_after_episodes) {
+      const int next = next_curriculum_level(p_.curriculum, static_cast<double>(window_successes_) / instances, level_);
+      if (next != level_) {
+        level_ = next;
+        ++infos_.curriculum_changes;
+        apply_level();
+      }
+      window_successes_ = window_crashes_ = window_timeouts_ = 0;
+    }
+    for (int env = 0; env < num_envs_; ++env) {
+      if (ended_[static_cast<std::size_t>(env)]) {
+        world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
+        clear_memory(env);
+      }
+      write_obs(env);
+    }
+  }
+
+  // Velocity towards the goal at full speed, yawing to face it (so a forward sensor looks along
+  // the path), with a reactive dodge read from the pooled image: when the central half of the
+  // image sees something closer than 0.65 of the sensor's range, the command blends towards the
+  // clearest side (left / right / up / down half of the image's central band) and slows down.
+  bool scripted_actions(float* actions) const override {
+    const int rows = p_.pool_rows, cols = p_.pool_cols;
+    const int r0 = rows / 4, r1 = std::max(r0 + 1, rows - rows / 4), c0 = cols / 4, c1 = std::max(c0 + 1, cols - cols / 4);
+    for (int env = 0; env < num_envs_; ++env) {
+      const float* o = &obs_[static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_)];
+      const float* img = o + kNavStateObs;  // row 0 top, column 0 left (body +y)
+      float* a = actions + static_cast<std::size_t>(env) * kNavActionDim;
+      for (int k = 0; k < 3; ++k) a[k] = o[k];
+      const float heading = std::atan2(o[1], o[0]);
+      a[3] = std::min(1.0f, std::max(-1.0f, heading));
+      float ahead = 1.0f;
+      for (int r = r0; r < r1; ++r)
+        for (int c = c0; c < c1; ++c) ahead = std::min(ahead, img[r * cols + c]);
+      constexpr float kClear = 0.65f;
+      if (!(ahead < kClear) || std::fabs(heading) > 0.5f) continue;  // clear, or not yet facing the goal
+      float side[4] = {0, 0, 0, 0};  // left, right, up, down: mean clearance of that half
+      for (int r = r0; r < r1; ++r)
+        for (int c = 0; c < cols; ++c) side[c < cols / 2 ? 0 : 1] += img[r * cols + c];
+      for (int r = 0; r < rows; ++r)
+        for (int c = c0; c < c1; ++c) side[r < rows / 2 ? 2 : 3] += img[r * cols + c];
+      const float lr_norm = static_cast<float>((r1 - r0) * (cols / 2)), ud_norm = static_cast<float>((rows / 2) * (c1 - c0));
+      const float mean[4] = {side[0] / lr_norm, side[1] / lr_norm, side[2] / ud_norm, side[3] / ud_norm};
+      int best = 0;
+      for (int k = 1; k < 4; ++k)
+        if (mean[k] > mean[best]) best = k;
+      const float dodge[4][3] = {{0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      const float s = (kClear - ahead) / kClear;  // 0 at the threshold, 1 touching
+      for (int k = 0; k < 3; ++k) a[k] = (1.0f - s) * a[k] + s * dodge[best][k];
+    }
+    return true;
+  }
+
+  int curriculum_level() const { return level_; }
+
+ private:
+  float progress_fraction() const {
+    const int span = p_.curriculum.max_level - p_.curriculum.min_level;
+    return span > 0 ? static_cast<float>(level_ - p_.curriculum.min_level) / static_cast<float>(span) : 0.0f;
+  }
+
+  void apply_level() {
+    world_->set_curriculum_level(static_cast<real>(progress_fraction()));
+    infos_.curriculum_level = level_;
+  }
+
+  void goal_error_vehicle(int env, float e_v[3]) const {
+    const task_access::RobotView r = task_access::robot(*world_, env);
+    const Vec3 e = world_->target(env, 0) - r.position_w;
+    const auto& qc = r.orientation_wb.coeffs();  // xyzw
+    const float q[4] = {static_cast<float>(qc[0]), static_cast<float>(qc[1]), static_cast<float>(qc[2]),
+                        static_cast<float>(qc[3])};
+    const float e_w[3] = {static_cast<float>(e[0]), static_cast<float>(e[1]), static_cast<float>(e[2])};
+    vehicle_frame_error(q, e_w, e_v);
+  }
+
+  void clear_memory(int env) {
+    const std::size_t i = static_cast<std::size_t>(env);
+    episode_reward_[i] = 0;
+    for (int k = 0; k < kNavActionDim; ++k) action_[i * kNavActionDim + k] = action_prev_[i * kNavActionDim + k] = 0;
+    goal_error_vehicle(env, &err_prev_[i * 3]);  // the first "getting closer" of an episode is from its start
+  }
+
+  void reset_one(int env) {
+    world_->reset_env(env);
+    const std::size_t i = static_cast<std::size_t>(env);
+    rewards_[i] = 0;
+    terminations_[i] = 0;
+    truncations_[i] = 0;
+    clear_memory(env);
+    write_obs(env);
+  }
+
+  void write_obs(int env) {
+    const std::size_t i = static_cast<std::size_t>(env);
+    float* o = &obs_[i * static_cast<std::size_t>(obs_dim_)];
+    const task_access::RobotView r = task_access::robot(*world_, env);
+    float e_v[3];
+    goal_error_vehicle(env, e_v);
+    const float d = norm3(e_v);
+    for (int k = 0; k < 3; ++k) o[k] = d > 1e-6f ? e_v[k] / d : 0.0f;
+    o[3] = d;
+    const Vec3 eul = euler_xyz(r.orientation_wb);  // ssa: wrapped to [-pi, pi)
+    o[4] = static_cast<float>(eul[0]);
+    o[5] = static_cast<float>(eul[1]);
+    o[6] = 0.0f;
+    for (int k = 0; k < 3; ++k) o[7 + k] = static_cast<float>(r.linvel_b[k]);
+    for (int k = 0; k < 3; ++k) o[10 + k] = static_cast<float>(r.angvel_b[k]);
+    for (int k = 0; k < kNavActionDim; ++k) o[13 + k] = action_[i * kNavActionDim + k];
+    min_pool_ranges(world_->sensor_ranges(env, sensor_), world_->sensor_height(sensor_), world_->sensor_width(sensor_),
+                    max_range_m_, p_.pool_rows, p_.pool_cols, o + kNavStateObs);
+  }
+
+  NavigationParams p_;
+  int sensor_ = 0;
+  real max_range_m_ = 1;
+  int len_ = 0;
+  float success_radius_m_ = 1.0f;
+  int level_ = 0;
+  int window_successes_ = 0, window_crashes_ = 0, window_timeouts_ = 0;
+  std::vector<double> episode_reward_;
+  std::vector<float> err_prev_, action_, action_prev_;
+  std::vector<std::uint8_t> ended_;
+};
+
+}  // namespace
+
+std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error) {
+  if (config.robot.robots_per_env != 1) {
+    error = "navigation_task needs robots_per_env = 1";
+    return nullptr;
+  }
+  if (config.controller.kind != ControllerKind::lee_velocity) {
+    error = "navigation_task needs controller lee_velocity_control (got " + config.controller.name + ")";
+    return nullptr;
+  }
+  if (config.task.kind != TaskKind::position_setpoint) {
+    error = "navigation_task needs a position_setpoint task kind (a goal per episode)";
+    return nullptr;
+  }
+  const NavigationCurriculum& c = params.curriculum;
+  if (c.min_level > c.max_level || c.check_after_episodes < 1 || c.increase_step < 0 || c.decrease_step < 0) {
+    error = "navigation_task curriculum: expected min_level <= max_level, check_after_episodes >= 1, steps >= 0";
+    return nullptr;
+  }
+  if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || params.pool_rows < 1 || params.pool_cols < 1) {
+    error = "navigation_task: expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, pool_rows and pool_cols >= 1";
+    return nullptr;
+  }
+  int sensor = -1;
+  for (std::size_t k = 0; k < config.robot.sensors.size() && sensor < 0; ++k)
+    if (config.robot.sensors[k].kind != SensorKind::imu) sensor = static_cast<int>(k);
+  if (sensor < 0) {
+    error = "navigation_task needs a ray sensor (lidar, ToF or camera) on the robot for its image observation, e.g. "
+            "`sensors: [vl53l5cx]`";
+    return nullptr;
+  }
+  WorldConfig wc = config;
+  const int span = c.max_level - c.min_level;
+  const int start = std::min(std::max(c.start_level, c.min_level), c.max_level);
+  wc.env.curriculum_level = span > 0 ? static_cast<real>(start - c.min_level) / static_cast<real>(span) : 0;
+  std::unique_ptr<World> w = World::create(wc, error);
+  if (!w) return nullptr;
+  if (w->sensor_height(sensor) < params.pool_rows || w->sensor_width(sensor) < params.pool_cols) {
+    error = "navigation_task: sensor " + config.robot.sensors[static_cast<std::size_t>(sensor)].name + " image (" +
+            std::to_string(w->sensor_height(sensor)) + " x " + std::to_string(w->sensor_width(sensor)) +
+            ") is smaller than the pool grid (" + std::to_string(params.pool_rows) + " x " +
+            std::to_string(params.pool_cols) + ")";
+    return nullptr;
+  }
+  return std::unique_ptr<Task>(new NavigationTask(std::move(w), params, sensor));
+}
+
+TaskConfig navigation_task_config() {
+  TaskConfig t;
+  t.name = "navigation_task";
+  t.kind = TaskKind::position_setpoint;
+  t.episode_len_env_steps = 1000;  // 10 s of 10 ms env-steps
+  t.min_target_ratio = Vec3(0.90_r, 0.1_r, 0.1_r);  // navigation_task_config.target_min/max_ratio
+  t.max_target_ratio = Vec3(0.94_r, 0.9_r, 0.9_r);
+  t.success_radius_m = 1.0_r;  // the reference's success check radius
+  t.line_of_sight = false;     // obstacles between start and goal are the point
+  t.clearance_m = 0.3_r;
+  t.placement_attempts = 16;
+  t.setpoint_speed_m_s = 0;
+  return t;
+}
+
+TaskDefaults navigation_task_defaults() {
+  TaskDefaults d;
+  d.env = "env_with_obstacles";
+  d.controller = "lee_velocity_control";
+  d.sensors = {{"vl53l5cx", 1}};
+  return d;
+}
+
+}  // namespace kestrel::sim

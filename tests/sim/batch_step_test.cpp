@@ -1,0 +1,341 @@
+// The batched twin of the robot step (sim/batch_step.hpp) against the scalar core functions it
+// mirrors: bit-equal states after many steps from random (and deliberately awkward) states, and
+// whole worlds stepped with and without the batched path giving identical bits, for any thread
+// count, without heap allocation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "heap_counter.hpp"
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/kernel/rng.hpp"
+#include "kestrel/sim/batch_step.hpp"
+#include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/world.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sim;
+namespace al = kestrel::allocation;
+
+namespace {
+
+// The twin reproduces the float build's Eigen SSE orders; in the double build batch::eligible() is
+// false and World keeps the scalar path (these tests then check only that).
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+constexpr bool kTwinBuild = false;
+#else
+constexpr bool kTwinBuild = true;
+#endif
+
+bool same_bits(const real* a, const real* b, int n) { return std::memcmp(a, b, sizeof(real) * static_cast<std::size_t>(n)) == 0; }
+
+::testing::AssertionResult same_body(const RigidBodyState& a, const RigidBodyState& b) {
+  if (same_bits(a.position_w.data(), b.position_w.data(), 3) && same_bits(a.linvel_w.data(), b.linvel_w.data(), 3) &&
+      same_bits(a.angvel_b.data(), b.angvel_b.data(), 3) &&
+      same_bits(a.orientation_wb.coeffs().data(), b.orientation_wb.coeffs().data(), 4))
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "body state differs: p " << a.position_w.transpose() << " vs "
+                                       << b.position_w.transpose() << ", q " << a.orientation_wb.coeffs().transpose()
+                                       << " vs " << b.orientation_wb.coeffs().transpose();
+}
+
+::testing::AssertionResult same_lee(const LeeState& a, const LeeState& b) {
+  const bool ok = same_bits(a.last_safe_wrench_b.force_b.data(), b.last_safe_wrench_b.force_b.data(), 3) &&
+                  same_bits(a.last_safe_wrench_b.torque_b.data(), b.last_safe_wrench_b.torque_b.data(), 3) &&
+                  same_bits(a.accel_command_w.data(), b.accel_command_w.data(), 3) &&
+                  same_bits(a.desired_quat_xyzw.data(), b.desired_quat_xyzw.data(), 4) &&
+                  same_bits(a.desired_angvel_b.data(), b.desired_angvel_b.data(), 3) && a.step_faults == b.step_faults &&
+                  a.faults.bits == b.faults.bits;
+  if (ok) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "controller state differs (faults " << a.faults.bits << " vs " << b.faults.bits << ")";
+}
+
+::testing::AssertionResult same_alloc(const al::AllocatorState& a, const al::AllocatorState& b) {
+  if (a.num_rotors == b.num_rotors && same_bits(a.last_thrust_N, b.last_thrust_N, al::kMaxRotors) &&
+      a.faults.bits == b.faults.bits && std::memcmp(a.active, b.active, sizeof(a.active)) == 0)
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "allocator state differs";
+}
+
+::testing::AssertionResult same_motors(const al::MotorModelState& a, const al::MotorModelState& b) {
+  constexpr int n = al::kMaxRotors;
+  const bool ok = a.num_motors == b.num_motors && same_bits(a.thrust_N, b.thrust_N, n) &&
+                  same_bits(a.axial_torque_Nm, b.axial_torque_Nm, n) && same_bits(a.health_scale, b.health_scale, n) &&
+                  same_bits(a.last_reference_N, b.last_reference_N, n) && a.pending_mask == b.pending_mask &&
+                  same_bits(&a.elapsed_s, &b.elapsed_s, 1) && a.faults.bits == b.faults.bits;
+  if (ok) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "motor state differs: thrust " << a.thrust_N[0] << " " << a.thrust_N[1] << " "
+                                       << a.thrust_N[2] << " " << a.thrust_N[3] << " vs " << b.thrust_N[0] << " "
+                                       << b.thrust_N[1] << " " << b.thrust_N[2] << " " << b.thrust_N[3];
+}
+
+// The constant models of the default robot (World::create's), with a settable integrator setup.
+struct Stack {
+  ControllerParams ctrl;
+  al::Airframe airframe;
+  al::AllocationModel alloc;
+  al::SequentialDesaturationParams desat;
+  al::MotorModelConfig motor;
+  RigidBodyModel body;
+  batch::Models models(real dt, int substeps) const {
+    batch::Models m;
+    m.controller = ControllerKind::lee_position;
+    m.ctrl = &ctrl;
+    m.alloc = &alloc;
+    m.desat = &desat;
+    m.motor = &motor;
+    m.airframe = &airframe;
+    m.body = &body;
+    m.dt_s = dt;
+    m.substeps = substeps;
+    return m;
+  }
+};
+
+Stack make_stack(bool rps, bool drag) {
+  Stack s;
+  const al::AirframePreset p = al::AirframePreset::base_quadrotor;
+  EXPECT_EQ(al::make_airframe(al::airframe_spec(p), s.airframe), Status::ok);
+  EXPECT_NE(al::build_allocation_model(s.airframe, s.alloc), Status::invalid_argument);
+  s.motor = al::motor_model_preset(p);
+  s.motor.use_rps = rps;
+  RigidBodyParams bp;
+  bp.integrator = Integrator::semi_implicit_euler;
+  if (drag) {
+    bp.linear_drag_b = Vec3(0.01_r, 0.02_r, 0.03_r);
+    bp.quadratic_drag_b = Vec3(0.001_r, 0.002_r, 0.004_r);
+    bp.angular_drag_b = Vec3(1e-4_r, 2e-4_r, 3e-4_r);
+    bp.quadratic_angular_drag_b = Vec3(1e-5_r, 1e-5_r, 2e-5_r);
+  }
+  EXPECT_EQ(make_rigid_body_model(bp, s.body), Status::ok);
+  s.ctrl.lee = lee_params_base_quadrotor();
+  s.ctrl.lee.randomize_gains = true;  // per-lane gains
+  s.ctrl.motors.num_motors = 4;
+  return s;
+}
+
+struct Robot {
+  RigidBodyState state;
+  ControllerState ctrl;
+  al::AllocatorState alloc;
+  al::MotorModelState motors;
+  real action[kMaxActionDim] = {};
+  Vec3 contact_force_w = Vec3::Zero();
+  Vec3 contact_torque_b = Vec3::Zero();
+};
+
+// World::robot_dynamics for one robot, written out from the scalar core functions.
+void scalar_step(const Stack& s, Robot& r, real dt, int substeps) {
+  ControllerOutput out;
+  (void)update_controller(ControllerKind::lee_position, s.ctrl, r.ctrl, r.state, r.action, kMaxActionDim, out);
+  al::AllocationResult res;
+  (void)al::allocate_sequential_desaturation(s.alloc, s.desat, r.alloc, out.wrench_b, res);
+  (void)al::motor_model_step(s.motor, r.motors, res.thrust_N, dt);
+  Wrench w = Wrench::from_vec6(al::wrench_from_thrusts(s.airframe.effectiveness, 4, r.motors.thrust_N));
+  w.torque_b += r.contact_torque_b;
+  const real h = dt / static_cast<real>(substeps);
+  for (int k = 0; k < substeps; ++k) (void)step_rigid_body(s.body, r.state, w, h, r.contact_force_w);
+}
+
+// A random robot, with a share of awkward cases: commands outside the action range or non-finite,
+// yaw setpoints near +-pi (desired rotation with trace <= 0), large errors (saturated allocation),
+// zero velocities and rates (signed zeros), weak / dead / scheduled motor failures, contact
+// wrenches, and a non-finite contact force now and then.
+Robot random_robot(const Stack& s, RngStream& rng, int k) {
+  Robot r;
+  r.state.position_w = Vec3(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(0, 5));
+  r.state.orientation_wb = quat_from_euler_xyz(rng.uniform(-0.6_r, 0.6_r), rng.uniform(-0.6_r, 0.6_r), rng.uniform(-kPi, kPi));
+  if (k % 7 != 0) {
+    r.state.linvel_w = Vec3(rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3));
+    r.state.angvel_b = Vec3(rng.uniform(-4, 4), rng.uniform(-4, 4), rng.uniform(-2, 2));
+  }
+  controller_reset(ControllerKind::lee_position, s.ctrl, r.ctrl, rng);
+  al::reset_allocator(r.alloc);
+  real hover[al::kMaxRotors] = {};
+  for (int m = 0; m < 4; ++m) hover[m] = rng.uniform(0, 1.2_r);
+  EXPECT_EQ(al::motor_model_reset(s.motor, r.motors, rng, hover), Status::ok);
+  for (int i = 0; i < 3; ++i) r.action[i] = r.state.position_w[i] + rng.uniform(-(k % 3 == 0 ? 12 : 1), k % 3 == 0 ? 12 : 1);
+  r.action[3] = k % 5 == 0 ? kPi - rng.uniform(0, 0.1_r) : rng.uniform(-1, 1);
+  switch (k % 23) {
+    case 1: r.action[0] = 1e6_r; break;  // outside the action range: clipped by the controller
+    case 2: r.action[1] = std::numeric_limits<real>::quiet_NaN(); break;
+    case 3: EXPECT_EQ(al::inject_motor_failure(r.motors, 2, 0.5_r), Status::ok); break;
+    case 4: EXPECT_EQ(al::inject_motor_failure(r.motors, 1, 0), Status::ok); break;
+    case 5: EXPECT_EQ(al::schedule_motor_failure(r.motors, 3, 0.3_r, 0.05_r), Status::ok); break;
+    case 6: r.contact_force_w = Vec3(0.5_r, -0.2_r, 3); r.contact_torque_b = Vec3(0.001_r, 0, -0.002_r); break;
+    case 7: r.contact_force_w[2] = std::numeric_limits<real>::infinity(); break;
+    case 8: r.state.orientation_wb = quat_from_euler_xyz(3.0_r, 0.1_r, 0.2_r); break;  // upside down
+    default: break;
+  }
+  return r;
+}
+
+void run_twin(bool rps, bool drag, int substeps) {
+  if (!kTwinBuild) GTEST_SKIP() << "the batched twin covers the float build only";
+  const Stack s = make_stack(rps, drag);
+  const real dt = 0.01_r;
+  const batch::Models m = s.models(dt, substeps);
+  ASSERT_TRUE(batch::eligible(m));
+  constexpr int kRobots = 4 * 60;
+  std::vector<Robot> a, b;
+  RngStream rng(11, 0, kPurposeReset);
+  for (int k = 0; k < kRobots; ++k) a.push_back(random_robot(s, rng, k));
+  b = a;
+  const Vec3 p10 = a[10].state.position_w;
+  for (int step = 0; step < 150; ++step) {
+    for (int g = 0; g < kRobots; g += batch::kLanes) {
+      batch::Lane lanes[batch::kLanes];
+      for (int l = 0; l < batch::kLanes; ++l) {
+        Robot& r = a[static_cast<std::size_t>(g + l)];
+        lanes[l].state = &r.state;
+        lanes[l].ctrl = &r.ctrl;
+        lanes[l].alloc = &r.alloc;
+        lanes[l].motors = &r.motors;
+        lanes[l].action = r.action;
+        lanes[l].contact_force_w = &r.contact_force_w;
+        lanes[l].contact_torque_b = &r.contact_torque_b;
+      }
+      batch::robot_step(m, lanes);
+    }
+    for (Robot& r : b) scalar_step(s, r, dt, substeps);
+    for (int k = 0; k < kRobots; ++k) {
+      const Robot &x = a[static_cast<std::size_t>(k)], &y = b[static_cast<std::size_t>(k)];
+      ASSERT_TRUE(same_body(x.state, y.state)) << "robot " << k << " step " << step;
+      ASSERT_TRUE(same_lee(x.ctrl.lee, y.ctrl.lee)) << "robot " << k << " step " << step;
+      ASSERT_TRUE(same_alloc(x.alloc, y.alloc)) << "robot " << k << " step " << step;
+      ASSERT_TRUE(same_motors(x.motors, y.motors)) << "robot " << k << " step " << step;
+    }
+  }
+  // The run must have gone somewhere: robots moved, motors spun, some allocations saturated.
+  int saturated = 0;
+  for (const Robot& r : a) saturated += r.alloc.faults.has(kFaultSaturated) ? 1 : 0;
+  EXPECT_GT(saturated, 0);
+  EXPECT_GT((a[10].state.position_w - p10).norm(), 0);
+}
+
+WorldConfig world_config(const char* env, int num_envs, int threads) {
+  WorldConfig c;
+  EXPECT_TRUE(registries().envs.make(env, c.env));
+  c.env.num_envs = num_envs;
+  c.num_threads = threads;
+  c.seed = 7;
+  return c;
+}
+
+std::unique_ptr<World> build(const WorldConfig& c, bool batched) {
+  std::string err;
+  auto w = World::create(c, err);
+  EXPECT_TRUE(w) << err;
+  if (w) w->set_batched(batched);
+  return w;
+}
+
+}  // namespace
+
+TEST(SimBatchStep, BitEqualToScalarRotorSpeedMotors) { run_twin(true, false, 1); }
+TEST(SimBatchStep, BitEqualToScalarThrustStateMotorsWithDragAndSubsteps) { run_twin(false, true, 3); }
+// The baseline (SSE2) copy of the kernel, where the AVX2 copy is the one in use by default.
+TEST(SimBatchStep, BaselineKernelBitEqualToScalar) {
+  const bool avx2 = batch::force_baseline_kernel(true);
+  EXPECT_FALSE(avx2);
+  run_twin(true, false, 1);
+  run_twin(false, true, 2);
+  batch::force_baseline_kernel(false);
+}
+
+TEST(SimBatchStep, EligibilityFollowsTheConfiguration) {
+  const Stack s = make_stack(true, false);
+  batch::Models m = s.models(0.01_r, 1);
+  EXPECT_EQ(batch::eligible(m), kTwinBuild);
+  m.controller = ControllerKind::lee_velocity;
+  EXPECT_FALSE(batch::eligible(m));
+  Stack t = make_stack(true, false);
+  t.motor.integrator = al::MotorIntegrator::euler;
+  EXPECT_FALSE(batch::eligible(t.models(0.01_r, 1)));
+  t = make_stack(true, false);
+  t.body.params.integrator = Integrator::rk4;
+  EXPECT_FALSE(batch::eligible(t.models(0.01_r, 1)));
+
+  // The world uses the batched path for the default robot and falls back where it must.
+  WorldConfig c = world_config("empty", 8, 1);
+  EXPECT_EQ(build(c, true)->batched(), kTwinBuild);
+  EXPECT_FALSE(build(c, false)->batched());
+  c.env.perturb_observations = true;
+  EXPECT_FALSE(build(c, true)->batched());
+  c = world_config("empty", 8, 1);
+  c.robot.robots_per_env = 2;
+  EXPECT_FALSE(build(c, true)->batched());
+}
+
+// Whole worlds: the batched path changes no bit of any environment (robots, controllers, motors,
+// allocators, obstacles, statistics), with resets, crashes, per-env latency, a random number of
+// physics steps per env-step (mixed lockstep groups), substeps, IMUs and randomised gains.
+TEST(SimBatchStep, WorldBitIdenticalWithAndWithoutBatchedPath) {
+  struct Case {
+    const char* env;
+    int envs;
+    bool variety;
+  };
+  for (const Case& k : {Case{"empty", 37, false}, Case{"forest", 41, false}, Case{"env_with_obstacles", 21, true},
+                        Case{"dynamic", 19, true}}) {
+    WorldConfig c = world_config(k.env, k.envs, 2);
+    c.controller.randomize_gains = true;
+    c.task.episode_len_env_steps = 150;
+    if (k.variety) {
+      c.env.sample_timestep_for_latency = true;
+      c.env.num_physics_steps_per_env_step_mean = 2;
+      c.env.num_physics_steps_per_env_step_std = 0.6_r;
+      c.sim.substeps = 2;
+      SensorConfig imu;
+      imu.name = "imu";
+      imu.kind = SensorKind::imu;
+      c.robot.sensors.push_back(imu);
+    }
+    auto a = build(c, true), b = build(c, false);
+    ASSERT_EQ(a->batched(), kTwinBuild) << k.env;
+    ASSERT_FALSE(b->batched()) << k.env;
+    for (int s = 0; s < 400; s += 50) {
+      a->step(50);
+      b->step(50);
+      for (int e = 0; e < k.envs; ++e) {
+        ASSERT_TRUE(same_body(a->robot_state(e, 0), b->robot_state(e, 0))) << k.env << " env " << e << " step " << s;
+        ASSERT_TRUE(same_lee(a->controller_state(e, 0).lee, b->controller_state(e, 0).lee)) << k.env << " env " << e;
+        ASSERT_TRUE(same_motors(a->motor_state(e, 0), b->motor_state(e, 0))) << k.env << " env " << e;
+        ASSERT_EQ(a->stats(e).resets, b->stats(e).resets) << k.env << " env " << e;
+        ASSERT_EQ(a->stats(e).crashes, b->stats(e).crashes) << k.env << " env " << e;
+      }
+    }
+    EXPECT_EQ(a->state_hash(), b->state_hash()) << k.env;
+    EXPECT_GT(a->summary().resets, 0u) << k.env;
+  }
+}
+
+TEST(SimBatchStep, BatchedWorldHashIdenticalFor1_2_3Threads) {
+  WorldConfig c = world_config("forest", 45, 1);  // 45: groups of 4 split unevenly over threads
+  std::uint64_t h[3] = {};
+  for (int t = 1; t <= 3; ++t) {
+    c.num_threads = t;
+    auto w = build(c, true);
+    ASSERT_EQ(w->batched(), kTwinBuild);
+    w->step(300);
+    h[t - 1] = w->state_hash();
+  }
+  EXPECT_EQ(h[0], h[1]);
+  EXPECT_EQ(h[0], h[2]);
+}
+
+TEST(SimBatchStep, NoHeapInsideBatchedStep) {
+  for (const char* env : {"empty", "forest"}) {
+    WorldConfig c = world_config(env, 16, 1);  // one thread: the step runs on this (counted) thread
+    auto w = build(c, true);
+    ASSERT_EQ(w->batched(), kTwinBuild);
+    kestrel::test::HeapCounter counter;
+    w->step(600);  // includes crashes and resets
+    EXPECT_EQ(counter.allocations(), 0u) << env;
+    EXPECT_GT(w->summary().resets, 0u) << env;
+  }
+}

@@ -1,0 +1,54 @@
+// Frozen golden state hash: a small fixed scenario (6 dynamic environments with moving and
+// spinning obstacles, 2 robots each so robots also hit each other, disturbances on, 300 env-steps,
+// 1 thread) whose final World::state_hash() must equal the value committed below. Any change of
+// physics, collision, reset or random-stream results — intended or not — changes it. The
+// thread-count and run-to-run determinism tests (world_test.cpp) compare runs with each other;
+// this one compares with the past.
+//
+// Regenerating after an INTENDED change of results: run
+//   kestrel_sim_tests --gtest_filter=SimGoldenHash.*
+// read the "actual" hash in the failure message, and replace kGoldenStateHash with it in the same
+// commit as the change, saying in the commit message why the results changed.
+#include <gtest/gtest.h>
+
+#include <cinttypes>
+#include <cstdio>
+
+#include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/world.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sim;
+
+namespace {
+// Float build (the default); the double build (KESTREL_DOUBLE) has other bits and skips the check.
+constexpr std::uint64_t kGoldenStateHash = 0xe95f8efa954452c3ull;
+}  // namespace
+
+TEST(SimGoldenHash, DynamicEnvWithCollisionsMatchesTheFrozenHash) {
+  WorldConfig c;
+  ASSERT_TRUE(registries().envs.make("dynamic", c.env));
+  c.env.num_envs = 6;
+  c.env.enable_disturbance = true;
+  c.robot.robots_per_env = 2;
+  c.task.episode_len_env_steps = 120;
+  c.task.line_of_sight = false;  // straight flights through the moving obstacles: crashes
+  c.task.clearance_m = 0;
+  c.seed = 20261121;
+  c.num_threads = 1;
+  std::string err;
+  auto w = World::create(c, err);
+  ASSERT_TRUE(w) << err;
+  w->step(300);
+  const WorldSummary s = w->summary();
+  // The scenario must keep exercising what it guards: collisions, crashes and resets.
+  EXPECT_GT(s.crashes, 0u);
+  EXPECT_GT(s.resets, 0u);
+  char hex[32];
+  std::snprintf(hex, sizeof hex, "0x%016" PRIx64, w->state_hash());
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  GTEST_SKIP() << "golden hash is recorded for the float build (this build: " << hex << ")";
+#else
+  EXPECT_EQ(w->state_hash(), kGoldenStateHash) << "actual " << hex << "; see the file comment before updating kGoldenStateHash";
+#endif
+}

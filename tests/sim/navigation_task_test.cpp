@@ -1,0 +1,324 @@
+// navigation_task: reward against hand-computed values of Aerial Gym's compute_reward, the
+// curriculum rule, min-pooling, success / crash / truncation terminations with auto-reset, the
+// curriculum moving with the success rate, no heap in step, thread-count independence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "heap_counter.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/navigation_task.hpp"
+#include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/scenario.hpp"
+
+using namespace kestrel;
+using namespace kestrel::sim;
+
+namespace {
+
+// Empty 10 x 10 x 5 m env (or env_with_obstacles), base quad, lee_velocity_control, ToF 8 x 8.
+WorldConfig nav_config(int num_envs, std::uint64_t seed, const char* env = "empty", int threads = 2) {
+  WorldConfig c;
+  EXPECT_TRUE(registries().envs.make(env, c.env));
+  EXPECT_TRUE(registries().tasks.make("navigation_task", c.task));
+  EXPECT_TRUE(registries().controllers.make("lee_velocity_control", c.controller));
+  SensorConfig tof;
+  EXPECT_TRUE(registries().sensors.make("vl53l5cx", tof));
+  c.robot.sensors.push_back(tof);
+  c.env.num_envs = num_envs;
+  c.num_threads = threads;
+  c.seed = seed;
+  return c;
+}
+
+std::unique_ptr<Task> build(const WorldConfig& c, const NavigationParams& p = NavigationParams()) {
+  std::string err;
+  auto t = make_navigation_task(c, p, err);
+  EXPECT_TRUE(t) << err;
+  return t;
+}
+
+float dist_obs(const Task& t, int env) { return t.observations()[env * t.obs_dim() + 3]; }
+
+}  // namespace
+
+TEST(NavigationReward, HandComputedValues) {
+  const NavigationRewardParams p;
+  const float e[3] = {3, 4, 0}, e_prev[3] = {3, 4, 1};  // d = 5 from sqrt(26): 0.0990 m closer
+  const float a[4] = {1, 0, 0.5f, 0.2f}, a0[4] = {0, 0, 0, 0};
+  // pos 5 exp(-25/3.5) = 0.0039525, very close ~0, closer 10 * 0.0990195, (20 - 5)/20 = 0.75;
+  // action differences 0.8 (exp(-3.333) - 1) + 0.8 (exp(-0.25 * 5) - 1) + 0.8 (exp(-0.04 * 3.33) - 1) = -1.4420154.
+  EXPECT_NEAR(navigation_reward(e, e_prev, false, a, a0, 0.0f, p), 0.30213215f, 2e-5f);
+  // progress 0.5: multiplier 2, absolute penalties 0.5 (0.1 (e^-0.3 - 1) + 1.5 (e^-0.25 - 1) + 1.5 (e^-0.08 - 1)).
+  EXPECT_NEAR(navigation_reward(e, e_prev, false, a, a0, 0.5f, p), 1.8097585f, 2e-5f);
+  // Moving away is punished twice as hard: 20 * (5 - sqrt(26)).
+  EXPECT_NEAR(navigation_reward(e_prev, e, false, a0, a0, 0.0f, p), -1.2323711f, 2e-5f);
+  // Near the goal, still: 5 exp(-0.25/3.5) + 5 exp(-0.5) + 0.975.
+  const float n[3] = {0.3f, 0.4f, 0};
+  EXPECT_NEAR(navigation_reward(n, n, false, a0, a0, 0.0f, p), 8.6629672f, 2e-5f);
+  EXPECT_EQ(navigation_reward(n, n, true, a0, a0, 0.0f, p), -100.0f);
+}
+
+TEST(NavigationReward, CurriculumRule) {
+  NavigationCurriculum c;  // 0..10, +2 above 0.7, -1 below 0.6
+  EXPECT_EQ(next_curriculum_level(c, 0.71, 3), 5);
+  EXPECT_EQ(next_curriculum_level(c, 0.70, 3), 3);  // strictly above
+  EXPECT_EQ(next_curriculum_level(c, 0.65, 3), 3);
+  EXPECT_EQ(next_curriculum_level(c, 0.59, 3), 2);
+  EXPECT_EQ(next_curriculum_level(c, 1.0, 9), 10);   // clamped
+  EXPECT_EQ(next_curriculum_level(c, 0.0, 0), 0);
+}
+
+TEST(NavigationTask, MinPoolRanges) {
+  // 4 x 4 image, max range 4 m: blocks of 2 x 2; -1 (no return) and NaN count as max range.
+  const real nan = std::numeric_limits<real>::quiet_NaN();
+  const real img[16] = {1, 2, 4, 4,   //
+                        3, 0.5_r, -1, 3,  //
+                        -1, -1, 8, nan,   //
+                        -1, -1, 2, 2};
+  float out[4];
+  min_pool_ranges(img, 4, 4, 4, 2, 2, out);
+  EXPECT_FLOAT_EQ(out[0], 0.125f);  // 0.5 / 4
+  EXPECT_FLOAT_EQ(out[1], 0.75f);   // 3 / 4
+  EXPECT_FLOAT_EQ(out[2], 1.0f);    // nothing seen
+  EXPECT_FLOAT_EQ(out[3], 0.5f);    // 2 / 4 (8 is beyond range)
+  // Uneven split: 3 rows into 2 cells -> rows {0}, {1, 2}.
+  const real col[3] = {2, 1, 3};
+  float o2[2];
+  min_pool_ranges(col, 3, 1, 4, 2, 1, o2);
+  EXPECT_FLOAT_EQ(o2[0], 0.5f);
+  EXPECT_FLOAT_EQ(o2[1], 0.25f);
+}
+
+TEST(NavigationTask, ShapesAndFirstObservation) {
+  auto t = build(nav_config(4, 3));
+  ASSERT_TRUE(t);
+  EXPECT_STREQ(t->name(), "navigation_task");
+  EXPECT_EQ(t->obs_dim(), 17 + 64);
+  EXPECT_EQ(t->action_dim(), 4);
+  for (int e = 0; e < 4; ++e) {
+    const float* o = t->observations() + e * t->obs_dim();
+    const RigidBodyState& st = t->world().robot_state(e, 0);
+    const real d = (t->world().target(e, 0) - st.position_w).norm();
+    EXPECT_NEAR(o[3], static_cast<float>(d), 1e-4f);
+    EXPECT_NEAR(std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]), 1.0f, 1e-5f);
+    EXPECT_GT(d, 5.0_r);  // goal ratio x 0.90..0.94, start 0.1..0.2 of 10 m
+    for (int k = 13; k < 17; ++k) EXPECT_EQ(o[k], 0.0f);
+    for (int k = 17; k < t->obs_dim(); ++k) EXPECT_TRUE(o[k] >= 0.0f && o[k] <= 1.0f);
+    // Goal inside the bounds' ratio box.
+    Vec3 lo, hi;
+    t->world().lower_upper_bounds(e, lo, hi);
+    const Vec3 r = (t->world().target(e, 0) - lo).cwiseQuotient(hi - lo);
+    EXPECT_TRUE(r[0] >= 0.9_r - 1e-5_r && r[0] <= 0.94_r + 1e-5_r) << r.transpose();
+    EXPECT_TRUE(r[1] >= 0.1_r - 1e-5_r && r[1] <= 0.9_r + 1e-5_r);
+  }
+}
+
+TEST(NavigationTask, ImageSeesTheGroundWhenPitchedDown) {
+  // The ToF looks along body x; pitched 80 deg nose-down 1 m above the floor the centre cells see
+  // the ground at ~1 m (0.25 of its 4 m range); level at 4.5 m it sees nothing (1.0).
+  auto t = build(nav_config(1, 5));
+  ASSERT_TRUE(t);
+  RigidBodyState& st = t->world().robot_state(0, 0);
+  st.position_w = Vec3(0, 0, 1);
+  st.orientation_wb = quat_from_euler_xyz(0, 80 * kPi / 180, 0);
+  t->world().render_sensors(0);
+  std::vector<float> pool(64);
+  min_pool_ranges(t->world().sensor_ranges(0, 0), t->world().sensor_height(0), t->world().sensor_width(0), 4, 8, 8, pool.data());
+  float mn = 1;
+  for (float v : pool) mn = std::min(mn, v);
+  EXPECT_NEAR(mn, 0.25f, 0.05f);
+  st.orientation_wb = Quat::Identity();
+  st.position_w = Vec3(0, 0, 4.5_r);  // level, high: the 45 deg lower edge meets the floor 6.4 m away
+  t->world().render_sensors(0);
+  min_pool_ranges(t->world().sensor_ranges(0, 0), t->world().sensor_height(0), t->world().sensor_width(0), 4, 8, 8, pool.data());
+  for (float v : pool) EXPECT_EQ(v, 1.0f);
+}
+
+TEST(NavigationTask, SuccessTerminatesAndAutoResets) {
+  auto t = build(nav_config(2, 7));
+  ASSERT_TRUE(t);
+  const Vec3 goal = t->world().target(0, 0);
+  RigidBodyState& st = t->world().robot_state(0, 0);
+  st.position_w = goal + Vec3(0.3_r, 0, 0);  // inside the 1 m success radius
+  const std::vector<float> zero(2 * 4, 0.0f);
+  t->step(zero.data());
+  EXPECT_EQ(t->terminations()[0], 1);
+  EXPECT_EQ(t->truncations()[0], 0);
+  EXPECT_EQ(t->terminations()[1], 0);
+  EXPECT_EQ(t->infos().successes, 1u);
+  EXPECT_EQ(t->infos().crashes, 0u);
+  EXPECT_EQ(t->infos().episodes, 1u);
+  EXPECT_DOUBLE_EQ(t->infos().success_rate(), 1.0);
+  EXPECT_GT(t->rewards()[0], 5.0f);  // the proximity terms, not a penalty
+  // The returned row is the new episode's first observation.
+  EXPECT_EQ(t->world().episode_step(0), 0);
+  const real d_new = (t->world().target(0, 0) - t->world().robot_state(0, 0).position_w).norm();
+  EXPECT_NEAR(dist_obs(*t, 0), static_cast<float>(d_new), 1e-4f);
+  EXPECT_GT(d_new, 5.0_r);
+}
+
+TEST(NavigationTask, CrashGivesCollisionPenalty) {
+  auto t = build(nav_config(2, 8));
+  ASSERT_TRUE(t);
+  t->world().robot_state(1, 0).position_w[2] = 0.05_r;  // into the ground plane
+  const std::vector<float> zero(2 * 4, 0.0f);
+  t->step(zero.data());
+  EXPECT_EQ(t->terminations()[1], 1);
+  EXPECT_EQ(t->rewards()[1], -100.0f);
+  EXPECT_EQ(t->terminations()[0], 0);
+  EXPECT_EQ(t->infos().crashes, 1u);
+  EXPECT_EQ(t->infos().successes, 0u);
+  EXPECT_EQ(t->world().episode_step(1), 0);
+  EXPECT_EQ(t->world().episode_step(0), 1);
+}
+
+TEST(NavigationTask, TruncationAtEpisodeLength) {
+  WorldConfig c = nav_config(3, 9);
+  c.task.episode_len_env_steps = 15;
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  const std::vector<float> zero(3 * 4, 0.0f);
+  for (int s = 1; s <= 15; ++s) {
+    t->step(zero.data());
+    for (int e = 0; e < 3; ++e) {
+      EXPECT_EQ(t->terminations()[e], 0);
+      EXPECT_EQ(t->truncations()[e], s == 15 ? 1 : 0) << "step " << s;
+    }
+  }
+  EXPECT_EQ(t->infos().truncations, 3u);
+  EXPECT_EQ(t->infos().successes, 0u);
+}
+
+TEST(NavigationTask, ActionsAreScaledVelocityCommands) {
+  auto t = build(nav_config(1, 10));
+  ASSERT_TRUE(t);
+  const float a[4] = {3.0f, -0.25f, 0.5f, 0.5f};  // x clamped to 1
+  t->step(a);
+  const real* w = t->world().action(0, 0);
+  EXPECT_FLOAT_EQ(static_cast<float>(w[0]), 2.0f);
+  EXPECT_FLOAT_EQ(static_cast<float>(w[1]), -0.5f);
+  EXPECT_FLOAT_EQ(static_cast<float>(w[2]), 1.0f);
+  EXPECT_NEAR(static_cast<float>(w[3]), 0.5f * 1.0471976f, 1e-6f);
+  const float* o = t->observations();
+  EXPECT_FLOAT_EQ(o[13], 2.0f);  // the robot's (transformed) actions
+  EXPECT_FLOAT_EQ(o[14], -0.5f);
+  const float bad[4] = {std::nanf(""), 0, 0, 0};
+  t->step(bad);
+  EXPECT_EQ(t->world().action(0, 0)[0], 0_r);
+}
+
+TEST(NavigationTask, CurriculumFollowsSuccessRate) {
+  // Zero actions never succeed: every window of 6 timeouts lowers the level by 1.
+  {
+    WorldConfig c = nav_config(6, 11, "env_with_obstacles");
+    c.task.episode_len_env_steps = 10;
+    NavigationParams p;
+    p.curriculum.start_level = 5;
+    p.curriculum.check_after_episodes = 6;
+    auto t = build(c, p);
+    ASSERT_TRUE(t);
+    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.5f);
+    const std::vector<float> zero(6 * 4, 0.0f);
+    for (int s = 0; s < 30; ++s) t->step(zero.data());
+    EXPECT_EQ(t->infos().curriculum_level, 2);  // three windows
+    EXPECT_EQ(t->infos().curriculum_changes, 3u);
+    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.2f);
+  }
+  // The scripted policy in the empty env succeeds: the level rises by 2 per window.
+  {
+    WorldConfig c = nav_config(8, 12);
+    c.task.episode_len_env_steps = 800;
+    NavigationParams p;
+    p.curriculum.check_after_episodes = 8;
+    auto t = build(c, p);
+    ASSERT_TRUE(t);
+    std::vector<float> a(8 * 4);
+    while (t->infos().episodes < 8) {
+      ASSERT_TRUE(t->scripted_actions(a.data()));
+      t->step(a.data());
+      ASSERT_LT(t->infos().steps, 2000u);
+    }
+    EXPECT_EQ(t->infos().successes, 8u);
+    EXPECT_EQ(t->infos().curriculum_level, 2);
+    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.2f);
+  }
+}
+
+TEST(NavigationTask, ScriptedBeatsZeroInObstacles) {
+  WorldConfig c = nav_config(16, 13, "env_with_obstacles");
+  auto scripted = build(c);
+  auto zero = build(c);
+  ASSERT_TRUE(scripted && zero);
+  std::vector<float> a(16 * 4, 0.0f);
+  const std::vector<float> z(16 * 4, 0.0f);
+  for (int s = 0; s < 800; ++s) {
+    ASSERT_TRUE(scripted->scripted_actions(a.data()));
+    scripted->step(a.data());
+    zero->step(z.data());
+  }
+  std::printf("navigation scripted: %llu episodes, %llu successes, %llu crashes; zero: %llu successes\n",
+              static_cast<unsigned long long>(scripted->infos().episodes),
+              static_cast<unsigned long long>(scripted->infos().successes),
+              static_cast<unsigned long long>(scripted->infos().crashes),
+              static_cast<unsigned long long>(zero->infos().successes));
+  EXPECT_GE(scripted->infos().successes, 6u);
+  EXPECT_EQ(zero->infos().successes, 0u);
+}
+
+TEST(NavigationTask, NoHeapInsideStep) {
+  WorldConfig c = nav_config(8, 14, "env_with_obstacles", 1);
+  c.task.episode_len_env_steps = 60;  // resets (truncations at least) inside the counted steps
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  std::vector<float> a(8 * 4, 0.0f);
+  for (int s = 0; s < 5; ++s) {
+    ASSERT_TRUE(t->scripted_actions(a.data()));
+    t->step(a.data());
+  }
+  kestrel::test::HeapCounter counter;
+  for (int s = 0; s < 200; ++s) {
+    (void)t->scripted_actions(a.data());
+    t->step(a.data());
+  }
+  EXPECT_EQ(counter.allocations(), 0u);
+  EXPECT_GE(t->infos().episodes, 16u);
+}
+
+TEST(NavigationTask, SameResultForAnyThreadCount) {
+  auto t1 = build(nav_config(6, 15, "env_with_obstacles", 1));
+  auto t3 = build(nav_config(6, 15, "env_with_obstacles", 3));
+  ASSERT_TRUE(t1 && t3);
+  std::vector<float> a(6 * 4);
+  for (int s = 0; s < 300; ++s) {
+    ASSERT_TRUE(t1->scripted_actions(a.data()));
+    t1->step(a.data());
+    t3->step(a.data());
+  }
+  EXPECT_EQ(t1->world().state_hash(), t3->world().state_hash());
+  for (int i = 0; i < 6 * t1->obs_dim(); ++i) ASSERT_EQ(t1->observations()[i], t3->observations()[i]) << i;
+  EXPECT_EQ(t1->infos().episodes, t3->infos().episodes);
+}
+
+TEST(NavigationTask, ErrorsAndScenario) {
+  std::string err;
+  WorldConfig c = nav_config(2, 1);
+  c.robot.sensors.clear();
+  EXPECT_FALSE(make_navigation_task(c, NavigationParams(), err));
+  EXPECT_NE(err.find("ray sensor"), std::string::npos) << err;
+  c = nav_config(2, 1);
+  EXPECT_TRUE(registries().controllers.make("lee_position_control", c.controller));
+  EXPECT_FALSE(make_task(c, err));
+  EXPECT_NE(err.find("lee_velocity_control"), std::string::npos) << err;
+  // A scenario naming only the task gets the task's scene (env_with_obstacles, velocity control, ToF).
+  WorldConfig s;
+  ASSERT_TRUE(load_scenario_string("task: navigation_task\nenv: {name: env_with_obstacles, num_envs: 3}\n", "nav.yaml", s, err)) << err;
+  EXPECT_EQ(s.controller.name, "lee_velocity_control");
+  ASSERT_EQ(s.robot.sensors.size(), 1u);
+  EXPECT_EQ(s.robot.sensors[0].name, "vl53l5cx");
+  auto t = make_task(s, err);
+  ASSERT_TRUE(t) << err;
+  EXPECT_STREQ(t->name(), "navigation_task");
+  EXPECT_EQ(t->num_envs(), 3);
+}
