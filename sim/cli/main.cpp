@@ -53,9 +53,9 @@ bool parse_long(const char* s, long long lo, long long& out) {
 // goal, dodging what its pooled image sees; goal_box_through_gap: waypoints through the gap) or
 // zero actions; the summary reports the episodes, their terminations, the success rate, the mean
 // episode reward and the reward trend (mean step reward over the first and the last quarter).
-int run_task(const WorldConfig& cfg, const std::string& label, long long steps, bool scripted) {
+int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, long long steps, bool scripted) {
   std::string err;
-  std::unique_ptr<Task> task = make_task(cfg, err);
+  std::unique_ptr<Task> task = make_task(cfg, backend, err);
   if (!task) {
     std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
     return 1;
@@ -68,9 +68,9 @@ int run_task(const WorldConfig& cfg, const std::string& label, long long steps, 
     return 1;
   }
   std::printf("kestrel run: %s\n", label.c_str());
-  std::printf("  task %s: %d envs x (%d obs, %d actions), controller %s, env %s, threads %d, seed %" PRIu64
-              ", steps %lld, policy %s\n", task->name(), n, od, ad, cfg.controller.name.c_str(), cfg.env.name.c_str(),
-              task->world().num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
+  std::printf("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
+              ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), cfg.controller.name.c_str(),
+              cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
   double reward_sum = 0, first_quarter = 0, last_quarter = 0;
   const long long quarter = std::max(1LL, steps / 4);
   const auto t0 = std::chrono::steady_clock::now();
@@ -99,7 +99,7 @@ int run_task(const WorldConfig& cfg, const std::string& label, long long steps, 
                   : last_quarter > first_quarter ? "rising" : "falling");
   if (std::string(task->name()) == "navigation_task")
     std::printf("  curriculum level %d (%" PRIu64 " changes)\n", in.curriculum_level, in.curriculum_changes);
-  std::printf("state hash: %016" PRIx64 "\n", task->world().state_hash());
+  std::printf("state hash: %016" PRIx64 "\n", task->state_hash());
   return 0;
 }
 
@@ -163,11 +163,7 @@ int run(int argc, char** argv) {
     return 1;
   }
   if (backend == Backend::planar) {
-    if (is_rl_task(cfg.task.name)) {
-      std::fprintf(stderr, "kestrel: %s: simulator planar: task %s runs on the 3-D World; use simulator: rigid\n", label.c_str(),
-                   cfg.task.name.c_str());
-      return 1;
-    }
+    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, steps, scripted);
     std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
     if (!sim) {
       std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
@@ -180,7 +176,7 @@ int run(int argc, char** argv) {
                  label.c_str());
     return 1;
   }
-  if (is_rl_task(cfg.task.name)) return run_task(cfg, label, steps, scripted);
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, steps, scripted);
   std::unique_ptr<World> world = World::create(cfg, err);
   if (!world) {
     std::fprintf(stderr, "kestrel: %s: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str(), err.c_str());

@@ -391,6 +391,16 @@ class PlanarSimulator final : public Simulator {
     }
   }
 
+  void set_auto_reset(bool on) override { auto_reset_ = on; }
+  void set_curriculum_level(real level) override {
+    if (std::isfinite(level)) cfg_.env.curriculum_level = std::min(std::max(level, 0_r), 1_r);  // read by generate_layout
+  }
+  void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const override {
+    const Env& ev = envs_[static_cast<std::size_t>(env)];
+    lower_w = ev.lower;
+    upper_w = ev.upper;
+  }
+
   std::uint64_t step_heap_fallbacks() const override {
     std::uint64_t n = 0;
     for (const Env& ev : envs_) n += ev.arena.fallbacks;
@@ -898,8 +908,11 @@ class PlanarSimulator final : public Simulator {
       real d = 0;
       for (int r = 0; r < robots_per_env_; ++r) d += distance_to_target(ei, r);
       es.final_distance_sum_m += static_cast<double>(d) / robots_per_env_;
-      reset_env(ei);  // renders the new episode's first scan
-      return;
+      if (auto_reset_) {
+        reset_env(ei);  // renders the new episode's first scan
+        return;
+      }
+      // Auto-reset off (a task owns the episode): keep the final state and scan; the owner calls reset_idx.
     }
     render_lidar(ei);
   }
@@ -956,6 +969,7 @@ class PlanarSimulator final : public Simulator {
   }
 
   bool ground_ = true;
+  bool auto_reset_ = true;
   std::string controller_;
   VelocitySteeringParams vs_;
   ControllerParams ctrl_;

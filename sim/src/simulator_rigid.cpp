@@ -1,6 +1,7 @@
 // Backend `rigid`: the 3-D batched World (sim/world.hpp) behind the Simulator interface. The World
 // keeps its own episode logic (auto-reset on timeout, exit or crash, task targets); this class
 // copies actions in, steps it, and exposes its state as the interface's flat views.
+#include <algorithm>
 #include <cmath>
 
 #include "kestrel/kernel/math.hpp"
@@ -54,9 +55,9 @@ class RigidSimulator final : public Simulator {
     for (int e = 0; e < num_envs_; ++e) {
       // The World resets an ended episode inside its step (auto-reset), which leaves the
       // environment at episode step 0.
-      const bool reset = world_->episode_step(e) == 0;
+      const bool reset = auto_reset_ ? world_->episode_step(e) == 0 : ended(e);
       reset_buf_[static_cast<std::size_t>(e)] = reset ? 1 : 0;
-      if (!reset) continue;
+      if (!reset || !auto_reset_) continue;
       // The new episode's actions (its target setpoint) become the current ones.
       for (int r = 0; r < robots_per_env_; ++r) {
         const std::size_t i = static_cast<std::size_t>(e * robots_per_env_ + r);
@@ -115,7 +116,31 @@ class RigidSimulator final : public Simulator {
     for (int e = 0; e < num_envs_; ++e) world_->render_sensors(e);
   }
 
+  void set_auto_reset(bool on) override {
+    auto_reset_ = on;
+    world_->set_auto_reset(on);
+  }
+  void set_curriculum_level(real level) override {
+    if (std::isfinite(level)) world_->set_curriculum_level(std::min(std::max(level, 0_r), 1_r));
+  }
+  void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const override { world_->lower_upper_bounds(env, lower_w, upper_w); }
+
   WorldSummary summary() const override { return world_->summary(); }
+
+  /// With auto-reset off: World::env_step's end rules (timeout, exit with its 0.5 m margin, crash
+  /// with reset_on_collision), evaluated on the state the World left.
+  bool ended(int e) const {
+    if (world_->episode_step(e) >= cfg_.task.episode_len_env_steps) return true;
+    Vec3 lo, hi;
+    world_->lower_upper_bounds(e, lo, hi);
+    for (int r = 0; r < robots_per_env_; ++r) {
+      const Vec3& p = world_->robot_state(e, r).position_w;
+      for (int k = 0; k < 3; ++k)
+        if (!(p[k] >= lo[k] - 0.5_r && p[k] <= hi[k] + 0.5_r)) return true;
+      if (cfg_.env.reset_on_collision && world_->crashed(e, r)) return true;
+    }
+    return false;
+  }
   std::uint64_t state_hash() const override { return world_->state_hash(); }
 
  protected:
@@ -189,6 +214,7 @@ class RigidSimulator final : public Simulator {
   }
 
   std::unique_ptr<World> world_;
+  bool auto_reset_ = true;
   LeeGains nominal_;
 };
 

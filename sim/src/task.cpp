@@ -8,6 +8,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
+#include "kestrel/sim/simulator.hpp"
 #include "tasks/task_access.hpp"
 
 namespace kestrel::sim {
@@ -22,6 +23,19 @@ Task::Task(std::unique_ptr<World> world, int obs_dim, int action_dim)
   terminations_.assign(n, 0);
   truncations_.assign(n, 0);
 }
+
+Task::Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim)
+    : sim_(std::move(sim)), num_envs_(sim_->num_envs()), obs_dim_(obs_dim), action_dim_(action_dim) {
+  const std::size_t n = static_cast<std::size_t>(num_envs_);
+  obs_.assign(n * static_cast<std::size_t>(obs_dim_), 0.0f);
+  rewards_.assign(n, 0.0f);
+  terminations_.assign(n, 0);
+  truncations_.assign(n, 0);
+}
+
+const char* Task::backend_name() const { return sim_ ? sim_->backend_name() : "rigid"; }
+int Task::num_threads() const { return sim_ ? sim_->num_threads() : world_->num_threads(); }
+std::uint64_t Task::state_hash() const { return sim_ ? sim_->state_hash() : world_->state_hash(); }
 
 // The arithmetic below follows the reference's float32 TorchScript expression order
 // (position_setpoint_task.py compute_reward / exp_func, utils/math.py quat_rotate), built with
@@ -301,6 +315,12 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error) {
   if (custom_tasks().has(id)) return make_custom_task(config, error);
   error = "unknown task '" + id + "'; registered task ids: " + rl_task_ids_joined();
   return nullptr;
+}
+
+std::unique_ptr<Task> make_planar_task(const WorldConfig& config, std::string& error);  // tasks/planar_tasks.cpp
+
+std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error) {
+  return backend == Backend::planar ? make_planar_task(config, error) : make_task(config, error);
 }
 
 }  // namespace kestrel::sim

@@ -6,20 +6,20 @@
 #include <cmath>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "navigation_common.hpp"
 #include "task_access.hpp"
 
 namespace kestrel::sim {
 
 namespace {
 
-constexpr int kNavActionDim = 4;
-constexpr int kNavStateObs = 17;  // goal direction (3), distance, roll, pitch, 0, v_b (3), w_b (3), actions (4)
+constexpr int kNavActionDim = nav::kActionDim;
+constexpr int kNavStateObs = nav::kStateObs;
+using nav::norm3;
 
 // The reference's exponential_reward_function / exponential_penalty_function.
 float exp_reward(float magnitude, float exponent, float v) { return magnitude * std::exp(-(v * v) * exponent); }
 float exp_penalty(float magnitude, float exponent, float v) { return magnitude * (std::exp(-(v * v) * exponent) - 1.0f); }
-
-float norm3(const float v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 }  // namespace
 
@@ -55,6 +55,95 @@ int next_curriculum_level(const NavigationCurriculum& c, double success_rate, in
 
 int navigation_obs_dim(const NavigationParams& p) { return kNavStateObs + p.pool_rows * p.pool_cols; }
 
+namespace nav {
+
+void transform_action(const float in[kActionDim], const NavigationParams& p, float out[kActionDim]) {
+  for (int k = 0; k < kActionDim; ++k) {
+    // clamp(-1, 1) then scale; a NaN action becomes 0 (never reaches the controller).
+    const float c = in[k] >= -1.0f && in[k] <= 1.0f ? in[k] : (in[k] > 1.0f ? 1.0f : (in[k] < -1.0f ? -1.0f : 0.0f));
+    out[k] = c * (k < 3 ? p.max_speed_m_s : p.max_yaw_rate_rad_s);
+  }
+}
+
+void write_state_obs(const float e_v[3], float roll, float pitch, const float v_b[3], const float w_b[3],
+                     const float action[kActionDim], float* o) {
+  const float d = norm3(e_v);
+  for (int k = 0; k < 3; ++k) o[k] = d > 1e-6f ? e_v[k] / d : 0.0f;
+  o[3] = d;
+  o[4] = roll;
+  o[5] = pitch;
+  o[6] = 0.0f;  // the reference zeroes the yaw slot
+  for (int k = 0; k < 3; ++k) o[7 + k] = v_b[k];
+  for (int k = 0; k < 3; ++k) o[10 + k] = w_b[k];
+  for (int k = 0; k < kActionDim; ++k) o[13 + k] = action[k];
+}
+
+// Velocity towards the goal at full speed, yawing to face it (so a forward sensor looks along
+// the path), with a reactive dodge read from the pooled image: when the central half of the
+// image sees something closer than 0.65 of the sensor's range, the command blends towards the
+// clearest side (left / right / up / down half of the image's central band) and slows down.
+void scripted_action(const float* o, const float* img, int rows, int cols, bool vertical, float* a) {
+  const int r0 = rows / 4, r1 = std::max(r0 + 1, rows - rows / 4), c0 = cols / 4, c1 = std::max(c0 + 1, cols - cols / 4);
+  for (int k = 0; k < 3; ++k) a[k] = o[k];
+  const float heading = std::atan2(o[1], o[0]);
+  a[3] = std::min(1.0f, std::max(-1.0f, heading));
+  float ahead = 1.0f;
+  for (int r = r0; r < r1; ++r)
+    for (int c = c0; c < c1; ++c) ahead = std::min(ahead, img[r * cols + c]);
+  constexpr float kClear = 0.65f;
+  if (!(ahead < kClear) || std::fabs(heading) > 0.5f) return;  // clear, or not yet facing the goal
+  float side[4] = {0, 0, 0, 0};  // left, right, up, down: mean clearance of that half
+  for (int r = r0; r < r1; ++r)
+    for (int c = 0; c < cols; ++c) side[c < cols / 2 ? 0 : 1] += img[r * cols + c];
+  for (int r = 0; r < rows; ++r)
+    for (int c = c0; c < c1; ++c) side[r < rows / 2 ? 2 : 3] += img[r * cols + c];
+  const float lr_norm = static_cast<float>((r1 - r0) * (cols / 2)), ud_norm = static_cast<float>((rows / 2) * (c1 - c0));
+  const float mean[4] = {side[0] / lr_norm, side[1] / lr_norm, side[2] / ud_norm, side[3] / ud_norm};
+  const int sides = vertical ? 4 : 2;  // one image row (planar): no up / down halves
+  int best = 0;
+  for (int k = 1; k < sides; ++k)
+    if (mean[k] > mean[best]) best = k;
+  const float dodge[4][3] = {{0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const float s = (kClear - ahead) / kClear;  // 0 at the threshold, 1 touching
+  for (int k = 0; k < 3; ++k) a[k] = (1.0f - s) * a[k] + s * dodge[best][k];
+}
+
+void EpisodeBook::count(bool crash, bool success, double episode_reward, TaskInfos& infos) {
+  ++infos.episodes;
+  infos.episode_reward_sum += episode_reward;
+  if (crash) {
+    ++infos.terminations;
+    ++infos.crashes;
+    ++window_crashes;
+  } else if (success) {
+    ++infos.terminations;
+    ++infos.successes;
+    ++window_successes;
+  } else {
+    ++infos.truncations;
+    ++window_timeouts;
+  }
+}
+
+bool EpisodeBook::update_curriculum(const NavigationCurriculum& c, TaskInfos& infos) {
+  const int instances = window_successes + window_crashes + window_timeouts;
+  if (instances < c.check_after_episodes) return false;
+  const int next = next_curriculum_level(c, static_cast<double>(window_successes) / instances, level);
+  window_successes = window_crashes = window_timeouts = 0;
+  if (next == level) return false;
+  level = next;
+  ++infos.curriculum_changes;
+  infos.curriculum_level = level;
+  return true;
+}
+
+float EpisodeBook::progress(const NavigationCurriculum& c) const {
+  const int span = c.max_level - c.min_level;
+  return span > 0 ? static_cast<float>(level - c.min_level) / static_cast<float>(span) : 0.0f;
+}
+
+}  // namespace nav
+
 namespace {
 
 class NavigationTask final : public Task {
@@ -73,7 +162,7 @@ class NavigationTask final : public Task {
     max_range_m_ = rp.normalize_range ? 1 : rp.max_range;  // normalised images are already in [0, 1]
     len_ = world_->config().task.episode_len_env_steps;
     success_radius_m_ = static_cast<float>(world_->config().task.success_radius_m);
-    level_ = std::min(std::max(p_.curriculum.start_level, p_.curriculum.min_level), p_.curriculum.max_level);
+    book_.level = std::min(std::max(p_.curriculum.start_level, p_.curriculum.min_level), p_.curriculum.max_level);
     apply_level();
     reset();
   }
@@ -95,13 +184,9 @@ class NavigationTask final : public Task {
       float* cur = &action_[static_cast<std::size_t>(env) * kNavActionDim];
       float* prev = &action_prev_[static_cast<std::size_t>(env) * kNavActionDim];
       real a[kNavActionDim];
-      for (int k = 0; k < kNavActionDim; ++k) {
-        prev[k] = cur[k];
-        // clamp(-1, 1) then scale; a NaN action becomes 0 (never reaches the controller).
-        const float c = in[k] >= -1.0f && in[k] <= 1.0f ? in[k] : (in[k] > 1.0f ? 1.0f : (in[k] < -1.0f ? -1.0f : 0.0f));
-        cur[k] = c * (k < 3 ? p_.max_speed_m_s : p_.max_yaw_rate_rad_s);
-        a[k] = static_cast<real>(cur[k]);
-      }
+      for (int k = 0; k < kNavActionDim; ++k) prev[k] = cur[k];
+      nav::transform_action(in, p_, cur);
+      for (int k = 0; k < kNavActionDim; ++k) a[k] = static_cast<real>(cur[k]);
       task_access::set_action(*world_, env, a, kNavActionDim);
     }
     world_->step(1);
@@ -122,34 +207,11 @@ class NavigationTask final : public Task {
       truncations_[i] = trunc ? 1 : 0;
       episode_reward_[i] += static_cast<double>(r);
       ended_[i] = (crash || success || trunc) ? 1 : 0;
-      if (!ended_[i]) continue;
-      ++infos_.episodes;
-      infos_.episode_reward_sum += episode_reward_[i];
-      if (crash) {
-        ++infos_.terminations;
-        ++infos_.crashes;
-        ++window_crashes_;
-      } else if (success) {
-        ++infos_.terminations;
-        ++infos_.successes;
-        ++window_successes_;
-      } else {
-        ++infos_.truncations;
-        ++window_timeouts_;
-      }
+      if (ended_[i]) book_.count(crash, success, episode_reward_[i], infos_);
     }
     // Curriculum before the resets, as the reference updates it before post_reward_calculation_step:
     // the environments ending now get their next layout at the new level.
-    const int instances = window_successes_ + window_crashes_ + window_timeouts_;
-    if (instances >= p_.curriculum.check_after_episodes) {
-      const int next = next_curriculum_level(p_.curriculum, static_cast<double>(window_successes_) / instances, level_);
-      if (next != level_) {
-        level_ = next;
-        ++infos_.curriculum_changes;
-        apply_level();
-      }
-      window_successes_ = window_crashes_ = window_timeouts_ = 0;
-    }
+    if (book_.update_curriculum(p_.curriculum, infos_)) apply_level();
     for (int env = 0; env < num_envs_; ++env) {
       if (ended_[static_cast<std::size_t>(env)]) {
         world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
@@ -159,53 +221,25 @@ class NavigationTask final : public Task {
     }
   }
 
-  // Velocity towards the goal at full speed, yawing to face it (so a forward sensor looks along
-  // the path), with a reactive dodge read from the pooled image: when the central half of the
-  // image sees something closer than 0.65 of the sensor's range, the command blends towards the
-  // clearest side (left / right / up / down half of the image's central band) and slows down.
+  // nav::scripted_action on every environment's observation row.
   bool scripted_actions(float* actions) const override {
-    const int rows = p_.pool_rows, cols = p_.pool_cols;
-    const int r0 = rows / 4, r1 = std::max(r0 + 1, rows - rows / 4), c0 = cols / 4, c1 = std::max(c0 + 1, cols - cols / 4);
-    for (int env = 0; env < num_envs_; ++env) {
+    for (int env = 0; env < num_envs_; ++env)
+    {
       const float* o = &obs_[static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_)];
-      const float* img = o + kNavStateObs;  // row 0 top, column 0 left (body +y)
-      float* a = actions + static_cast<std::size_t>(env) * kNavActionDim;
-      for (int k = 0; k < 3; ++k) a[k] = o[k];
-      const float heading = std::atan2(o[1], o[0]);
-      a[3] = std::min(1.0f, std::max(-1.0f, heading));
-      float ahead = 1.0f;
-      for (int r = r0; r < r1; ++r)
-        for (int c = c0; c < c1; ++c) ahead = std::min(ahead, img[r * cols + c]);
-      constexpr float kClear = 0.65f;
-      if (!(ahead < kClear) || std::fabs(heading) > 0.5f) continue;  // clear, or not yet facing the goal
-      float side[4] = {0, 0, 0, 0};  // left, right, up, down: mean clearance of that half
-      for (int r = r0; r < r1; ++r)
-        for (int c = 0; c < cols; ++c) side[c < cols / 2 ? 0 : 1] += img[r * cols + c];
-      for (int r = 0; r < rows; ++r)
-        for (int c = c0; c < c1; ++c) side[r < rows / 2 ? 2 : 3] += img[r * cols + c];
-      const float lr_norm = static_cast<float>((r1 - r0) * (cols / 2)), ud_norm = static_cast<float>((rows / 2) * (c1 - c0));
-      const float mean[4] = {side[0] / lr_norm, side[1] / lr_norm, side[2] / ud_norm, side[3] / ud_norm};
-      int best = 0;
-      for (int k = 1; k < 4; ++k)
-        if (mean[k] > mean[best]) best = k;
-      const float dodge[4][3] = {{0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-      const float s = (kClear - ahead) / kClear;  // 0 at the threshold, 1 touching
-      for (int k = 0; k < 3; ++k) a[k] = (1.0f - s) * a[k] + s * dodge[best][k];
+      nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, true,
+                           actions + static_cast<std::size_t>(env) * kNavActionDim);
     }
     return true;
   }
 
-  int curriculum_level() const { return level_; }
+  int curriculum_level() const { return book_.level; }
 
  private:
-  float progress_fraction() const {
-    const int span = p_.curriculum.max_level - p_.curriculum.min_level;
-    return span > 0 ? static_cast<float>(level_ - p_.curriculum.min_level) / static_cast<float>(span) : 0.0f;
-  }
+  float progress_fraction() const { return book_.progress(p_.curriculum); }
 
   void apply_level() {
     world_->set_curriculum_level(static_cast<real>(progress_fraction()));
-    infos_.curriculum_level = level_;
+    infos_.curriculum_level = book_.level;
   }
 
   void goal_error_vehicle(int env, float e_v[3]) const {
@@ -241,16 +275,12 @@ class NavigationTask final : public Task {
     const task_access::RobotView r = task_access::robot(*world_, env);
     float e_v[3];
     goal_error_vehicle(env, e_v);
-    const float d = norm3(e_v);
-    for (int k = 0; k < 3; ++k) o[k] = d > 1e-6f ? e_v[k] / d : 0.0f;
-    o[3] = d;
     const Vec3 eul = euler_xyz(r.orientation_wb);  // ssa: wrapped to [-pi, pi)
-    o[4] = static_cast<float>(eul[0]);
-    o[5] = static_cast<float>(eul[1]);
-    o[6] = 0.0f;
-    for (int k = 0; k < 3; ++k) o[7 + k] = static_cast<float>(r.linvel_b[k]);
-    for (int k = 0; k < 3; ++k) o[10 + k] = static_cast<float>(r.angvel_b[k]);
-    for (int k = 0; k < kNavActionDim; ++k) o[13 + k] = action_[i * kNavActionDim + k];
+    float v_b[3], w_b[3];
+    for (int k = 0; k < 3; ++k) v_b[k] = static_cast<float>(r.linvel_b[k]);
+    for (int k = 0; k < 3; ++k) w_b[k] = static_cast<float>(r.angvel_b[k]);
+    nav::write_state_obs(e_v, static_cast<float>(eul[0]), static_cast<float>(eul[1]), v_b, w_b,
+                         &action_[i * kNavActionDim], o);
     min_pool_ranges(world_->sensor_ranges(env, sensor_), world_->sensor_height(sensor_), world_->sensor_width(sensor_),
                     max_range_m_, p_.pool_rows, p_.pool_cols, o + kNavStateObs);
   }
@@ -260,8 +290,7 @@ class NavigationTask final : public Task {
   real max_range_m_ = 1;
   int len_ = 0;
   float success_radius_m_ = 1.0f;
-  int level_ = 0;
-  int window_successes_ = 0, window_crashes_ = 0, window_timeouts_ = 0;
+  nav::EpisodeBook book_;
   std::vector<double> episode_reward_;
   std::vector<float> err_prev_, action_, action_prev_;
   std::vector<std::uint8_t> ended_;

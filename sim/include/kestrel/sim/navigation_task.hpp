@@ -95,6 +95,13 @@ int navigation_obs_dim(const NavigationParams& p);
 /// (lidar, ToF or camera) on the robot; nullptr and a message otherwise.
 std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error);
 
+/// The same task on the planar backend (sim/src/tasks/planar_tasks.cpp): the fixed-altitude
+/// multirotor on lee_velocity_control, the 2-D lidar (simulator.lidar_beams, 128 if 0) pooled into
+/// pool_rows * pool_cols sectors as one image row (same obs_dim), vertical velocity dropped,
+/// curriculum through Simulator::set_curriculum_level. make_task(config, Backend::planar, error)
+/// calls it for "navigation_task".
+std::unique_ptr<Task> make_planar_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error);
+
 /// The registered TaskConfig (registries().tasks "navigation_task").
 TaskConfig navigation_task_config();
 /// Default scene: env_with_obstacles, base quadrotor, lee_velocity_control, the 8 x 8 VL53L5CX

@@ -22,8 +22,10 @@
 //
 // What a task sits on (the narrow API): num_envs/num_robots/action_dim, step(actions) with
 // post_physics_step's reset_buf, reset_idx, reset_root_states, push_robots, the base_* views,
-// contact_forces_w/crashed, target_w, lidar_ranges_m (or world()->sensor_* on rigid), and the
-// domain-randomisation views for privileged observations. Nothing else of either backend.
+// contact_forces_w/crashed, target_w, lidar_ranges_m (or world()->sensor_* on rigid), env_bounds,
+// set_auto_reset / set_curriculum_level (the task owns episode ends and the obstacle curriculum),
+// and the domain-randomisation views for privileged observations. Nothing else of either backend
+// (the planar tasks, sim/src/tasks/planar_tasks.cpp, use exactly this).
 //
 // Determinism: per-environment streams RngStream(seed, env, purpose); environments never read each
 // other, so results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes it).
@@ -95,6 +97,16 @@ class Simulator {
                                                const real* lin_vel_w, const real* ang_vel_w) = 0;
   /// Renders the sensors now (step() already renders them at the configured rate).
   virtual void update_sensors() = 0;
+  /// With auto-reset off, post_physics_step only flags reset_buf and leaves the ended episodes
+  /// as they are, so a task can read the final state (reward, terminations) and call reset_idx
+  /// itself (World::set_auto_reset). On by default.
+  virtual void set_auto_reset(bool on) = 0;
+  /// Obstacle curriculum level in [0, 1] (clamped; non-finite ignored): the share of each asset
+  /// class's [min_num_assets, num_assets] range used, from each environment's next layout on
+  /// (World::set_curriculum_level).
+  virtual void set_curriculum_level(real level) = 0;
+  /// The environment's bounds for its current episode (drawn at each reset).
+  virtual void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const = 0;
   /// legged_gym's _push_robots: every robot's world-frame v_x and v_y are set to values drawn
   /// uniformly in [-max_push_vel_xy_m_s, max_push_vel_xy_m_s] from its environment's push stream.
   void push_robots();

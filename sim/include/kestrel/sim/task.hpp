@@ -25,6 +25,9 @@
 
 namespace kestrel::sim {
 
+class Simulator;
+enum class Backend : std::uint8_t;
+
 /// Aerial Gym's `infos` is an empty dict in this task; here it carries the running episode
 /// statistics instead (summed over every episode finished since the task was built).
 struct TaskInfos {
@@ -70,12 +73,25 @@ class Task {
   const std::uint8_t* truncations() const { return truncations_.data(); }
   const TaskInfos& infos() const { return infos_; }
 
+  /// The 3-D World the task runs on (rigid backend). Only valid when has_world(): a task built
+  /// on the planar backend (make_task with Backend::planar) runs on simulator() instead.
   World& world() { return *world_; }
   const World& world() const { return *world_; }
+  bool has_world() const { return world_ != nullptr; }
+  /// The Simulator the task runs on (planar tasks); nullptr for tasks on the World.
+  Simulator* simulator() { return sim_.get(); }
+  const Simulator* simulator() const { return sim_.get(); }
+  /// "rigid" (World) or "planar" (Simulator).
+  const char* backend_name() const;
+  /// Threads and state hash of whichever of the two the task runs on.
+  int num_threads() const;
+  std::uint64_t state_hash() const;
 
  protected:
   Task(std::unique_ptr<World> world, int obs_dim, int action_dim);
+  Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim);
   std::unique_ptr<World> world_;
+  std::unique_ptr<Simulator> sim_;
   int num_envs_ = 0, obs_dim_ = 0, action_dim_ = 0;
   std::vector<float> obs_, rewards_;
   std::vector<std::uint8_t> terminations_, truncations_;
@@ -83,9 +99,15 @@ class Task {
 };
 
 /// Builds the task named by config.task.name: "position_setpoint_task", "navigation_task"
-/// (navigation_task.hpp) or a custom task id (custom_task.hpp). Returns nullptr and a message
-/// (listing the task ids) for an unknown task or a bad config.
+/// (navigation_task.hpp) or a custom task id (custom_task.hpp), on the 3-D World whatever
+/// config.simulator says (the backend overload below takes resolve_backend's choice, as `kestrel
+/// run` does). Returns nullptr and a message (listing the task ids) for an unknown task or a bad config.
 std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error);
+/// The same on an explicit backend: rigid is make_task above; planar builds the task on the Box2D
+/// backend (sim/src/tasks/planar_tasks.cpp: navigation_task and position_setpoint_task on the
+/// fixed-altitude multirotor), or nullptr and a message naming the backend and the alternative
+/// for a task that does not apply there (custom tasks, the ground vehicle).
+std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error);
 /// True if config.task.name names a Task (rather than the World's built-in scripted tasks).
 bool is_rl_task(const std::string& task_name);
 /// Every id make_task accepts, sorted ("a, b, c" for messages).

@@ -1,0 +1,46 @@
+// Pieces of navigation_task shared by its two implementations, the 3-D World one
+// (navigation_task.cpp) and the planar Simulator one (planar_tasks.cpp), so the action transform,
+// the state observations, the scripted policy and the episode / curriculum bookkeeping are one
+// code path (the reward is navigation_reward, navigation_task.hpp). Defined in navigation_task.cpp.
+#pragma once
+
+#include <cmath>
+
+#include "kestrel/sim/navigation_task.hpp"
+
+namespace kestrel::sim::nav {
+
+constexpr int kActionDim = 4;
+constexpr int kStateObs = 17;  // goal direction (3), distance, roll, pitch, 0, v_b (3), w_b (3), actions (4)
+
+inline float norm3(const float v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+/// [vx, vy, vz, yaw_rate] in [-1, 1] (clamped; NaN becomes 0) scaled by max_speed_m_s and
+/// max_yaw_rate_rad_s.
+void transform_action(const float in[kActionDim], const NavigationParams& p, float out[kActionDim]);
+
+/// The first kStateObs observations: unit goal direction and distance from the vehicle-frame
+/// error, roll, pitch, 0, body linear and angular velocity, the transformed actions.
+void write_state_obs(const float e_v[3], float roll, float pitch, const float v_b[3], const float w_b[3],
+                     const float action[kActionDim], float* o);
+
+/// The scripted policy for one environment from its observation row: the state part of `obs` and
+/// an image of rows x cols (row 0 top, column 0 left = body +y; on rigid obs + kStateObs, on planar
+/// the sectors of the pooled lidar row within +-90 deg of the heading). `vertical` allows dodging
+/// up/down (3-D); the planar multirotor has one row and dodges left/right only.
+void scripted_action(const float* obs, const float* img, int rows, int cols, bool vertical, float* a);
+
+/// Episode statistics and the curriculum window.
+struct EpisodeBook {
+  int level = 0;
+  int window_successes = 0, window_crashes = 0, window_timeouts = 0;
+  /// Counts one ended episode (crash, else success, else timeout) in the infos and the window.
+  void count(bool crash, bool success, double episode_reward, TaskInfos& infos);
+  /// After a window of check_after_episodes episodes: the next level (the reference's
+  /// check_and_update_curriculum_level). True if the level moved.
+  bool update_curriculum(const NavigationCurriculum& c, TaskInfos& infos);
+  /// Curriculum progress in [0, 1].
+  float progress(const NavigationCurriculum& c) const;
+};
+
+}  // namespace kestrel::sim::nav
