@@ -238,6 +238,11 @@ Status allocate_sequential_desaturation(const AllocationModel& model, const Sequ
                                         AllocatorState& state, const Vec6& wrench_cmd, AllocationResult& out) {
   const int n = model.num_rotors;
   if (n < 1 || n > kMaxRotors) return Status::invalid_argument;
+  // A library built for quadrotors (KESTREL_MAX_ROTORS=4, what a quad's firmware links) keeps
+  // only the unrolled 4-rotor path below: the run-time-count copy would be ~840 B of flash that
+  // the quad never runs. Same arithmetic as the default build (kestrel_cascade_capacity_parity);
+  // 1-3 rotor airframes need a larger capacity build (or allocate_pinv / CLS).
+  if (kMaxRotors == 4 && n != 4) return Status::invalid_argument;
   // all_finite(wrench_cmd), branch-free: w - w is exactly +0 for a finite w and NaN for inf or
   // NaN, and a sum with a NaN term is NaN. One compare instead of six classify-and-branch steps
   // (~28 Cortex-M4F instructions per call on every path). Needs IEEE semantics (no fast-math,
@@ -246,11 +251,15 @@ Status allocate_sequential_desaturation(const AllocationModel& model, const Sequ
   const real z2 = wrench_cmd(2) - wrench_cmd(2), z3 = wrench_cmd(3) - wrench_cmd(3);
   const real z4 = wrench_cmd(4) - wrench_cmd(4), z5 = wrench_cmd(5) - wrench_cmd(5);
   if (!((z0 + z1) + (z2 + z3) + (z4 + z5) == 0)) return detail::hold_allocation(model, state, out);
-  switch (n) {
-    case 4:
-      return allocate<4>(model, params, state, wrench_cmd, out);
-    default:
-      return allocate<0>(model, params, state, wrench_cmd, out);
+  if constexpr (kMaxRotors == 4) {
+    return allocate<4>(model, params, state, wrench_cmd, out);
+  } else {
+    switch (n) {
+      case 4:
+        return allocate<4>(model, params, state, wrench_cmd, out);
+      default:
+        return allocate<0>(model, params, state, wrench_cmd, out);
+    }
   }
 }
 

@@ -76,15 +76,15 @@ def short_symbol(name):
     return name[cut:]
 
 
-def render_breakdown(results, target):
+def render_breakdown(results, target, image="cascade_quad", csv_name="memory_breakdown.csv"):
     """<target>/memory_breakdown.csv (memory_breakdown.py): the quad control stack's bytes by role,
-    with its largest symbols."""
-    path = os.path.join(results, target, "memory_breakdown.csv")
+    with its largest symbols (memory_breakdown_baked.csv: the same for cascade_quad_baked)."""
+    path = os.path.join(results, target, csv_name)
     if not os.path.isfile(path):
         return []
     with open(path) as f:
         rows = list(csv.DictReader(f))
-    out = ["Where the quad control stack's bytes go (cascade_quad image minus the empty image; roles from",
+    out = [f"Where the quad control stack's bytes go ({image} image minus the empty image; roles from",
            "the linked image's call graph, bench/control/memory_breakdown.py):", "",
            "| role | bytes | largest symbols |", "|---|---:|---|"]
     for t in (r for r in rows if r["row"] == "total"):
@@ -230,15 +230,19 @@ def main():
             out += ["| image | flash bytes | static RAM bytes | flash - empty | RAM - empty |", "|---|---:|---:|---:|---:|"]
             for r in mrows:
                 out.append(f"| {r['image']} | {r['flash_bytes']} | {r['static_ram_bytes']} | {r['flash_minus_empty']} | {r['static_ram_minus_empty']} |")
-            for casc in (r for r in mrows if r["image"] in ("cascade", "cascade_quad")):
+            for casc in (r for r in mrows if r["image"] in ("cascade", "cascade_quad", "cascade_quad_baked")):
                 if target != "cortex-m4f":
                     break
                 fl, ram = int(casc["flash_minus_empty"]), int(casc["static_ram_minus_empty"])
-                what = "rotor capacity 4 (KESTREL_MAX_ROTORS=4)" if casc["image"] == "cascade_quad" else "default rotor capacity 12"
+                what = {"cascade_quad": "rotor capacity 4 (KESTREL_MAX_ROTORS=4)",
+                        "cascade_quad_baked": "rotor capacity 4, parameters, allocation model and initial state generated "
+                                              "at build time: no on-board pseudo-inverse or reset code, which a motor-failure "
+                                              "re-allocation on board needs"}.get(casc["image"], "default rotor capacity 12")
                 out += ["", f"Control stack ({casc['image']} image, {what}): flash {fl} B (target <= {FLASH_TARGET}: {'met' if fl <= FLASH_TARGET else 'NOT met'}), "
                             f"static RAM {ram} B (target <= {RAM_TARGET}: {'met' if ram <= RAM_TARGET else 'NOT met'})."]
             out.append("")
         out += render_breakdown(results, target)
+        out += render_breakdown(results, target, "cascade_quad_baked", "memory_breakdown_baked.csv")
         out += render_stack(results, target, rows)
     out += render_host_micro(results)
     out += ["## Peers (issue 6, same emulator and compiler, not re-measured here)", "", "| peer | instructions/call |", "|---|---:|"]

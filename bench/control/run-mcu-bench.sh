@@ -3,6 +3,7 @@
 #   bench/results/<target>/control.csv  instructions per call + painted stack bytes per function
 #   bench/results/<target>/memory.csv   flash / static RAM of the control stack (minimal images)
 #   bench/results/<target>/memory_breakdown.csv  the quad control stack's bytes by role and symbol
+#   bench/results/<target>/memory_breakdown_baked.csv  the same for the baked quad stack
 #   bench/results/<target>/stack.csv    static worst-case stack bound per entry point from GCC's
 #                                       call graph (stack_usage.py, -fcallgraph-info=su)
 #
@@ -22,7 +23,7 @@ out="$root/bench/results/$target"
 mkdir -p "$out"
 
 cmake --build "$build" -j 2 --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade \
-  kestrel_stack_cascade_quad kestrel_stack_capi
+  kestrel_stack_cascade_quad kestrel_stack_cascade_quad_baked kestrel_stack_capi
 machine=$(sed -n 's/^KESTREL_BOARD:[A-Z]*=//p' "$build/CMakeCache.txt")
 qemu=${QEMU:-qemu-system-arm}
 # The images' folder: bench/control/mcu in a Cortex-M tree (older trees: bench/control-mcu).
@@ -61,8 +62,10 @@ set -- $(mem empty); e_text=$1 e_data=$2 e_bss=$3
 {
   echo "image,text_bytes,data_bytes,bss_bytes,flash_bytes,static_ram_bytes,flash_minus_empty,static_ram_minus_empty"
   # cascade: the control stack with the default rotor capacity (12); cascade_quad: the same with
-  # the allocation library built for 4 rotors (KESTREL_MAX_ROTORS=4), as a quad's firmware would.
-  for img in empty cascade cascade_quad capi; do
+  # the allocation library built for 4 rotors (KESTREL_MAX_ROTORS=4), as a quad's firmware would;
+  # cascade_quad_baked: the quad stack with parameters, allocation model and initial state
+  # generated at build time (bench/control/mcu/baked_cascade.hpp; no on-board set-up code).
+  for img in empty cascade cascade_quad cascade_quad_baked capi; do
     set -- $(mem $img)
     echo "$img,$1,$2,$3,$(($1 + $2)),$(($2 + $3)),$(($1 + $2 - e_text - e_data)),$(($2 + $3 - e_data - e_bss))"
   done
@@ -71,8 +74,10 @@ set -- $(mem empty); e_text=$1 e_data=$2 e_bss=$3
 # read-only data, static RAM; one row per symbol).
 python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.elf" \
   "$imgdir/kestrel_stack_cascade_quad.elf" "$out/memory_breakdown.csv" > /dev/null
+python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.elf" \
+  "$imgdir/kestrel_stack_cascade_quad_baked.elf" "$out/memory_breakdown_baked.csv" > /dev/null
 # Static worst-case stack (GCC's frame sizes over the call graph); control.csv's stack_bytes column
 # is the painted-stack measurement of one call.
 python3 "$root/bench/control/stack_usage.py" "$build" "$out/stack.csv"
-echo "run-mcu-bench: wrote $out/control.csv, $out/memory.csv, $out/memory_breakdown.csv and $out/stack.csv"
+echo "run-mcu-bench: wrote $out/control.csv, $out/memory.csv, $out/memory_breakdown{,_baked}.csv and $out/stack.csv"
 cat "$out/control.csv" "$out/memory.csv" "$out/stack.csv"

@@ -15,6 +15,15 @@ namespace kestrel::sim {
 
 Task::~Task() = default;
 
+void Task::reset() {
+  for (int env = 0; env < num_envs_; ++env) reset_one(env);
+}
+
+void Task::reset_idx(const int* env_ids, int count) {
+  for (int k = 0; k < count; ++k)
+    if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
+}
+
 Task::Task(std::unique_ptr<World> world, int obs_dim, int action_dim)
     : world_(std::move(world)), num_envs_(world_->num_envs()), obs_dim_(obs_dim), action_dim_(action_dim) {
   const std::size_t n = static_cast<std::size_t>(num_envs_);
@@ -137,15 +146,6 @@ class PositionSetpointTask final : public Task {
     return true;
   }
 
-  void reset() override {
-    for (int env = 0; env < num_envs_; ++env) reset_one(env);
-  }
-
-  void reset_idx(const int* env_ids, int count) override {
-    for (int k = 0; k < count; ++k)
-      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
-  }
-
   void step(const float* actions) override {
     for (int env = 0; env < num_envs_; ++env) {
       const float* in = actions + static_cast<std::size_t>(env) * kPsActionDim;
@@ -195,7 +195,7 @@ class PositionSetpointTask final : public Task {
   }
 
  private:
-  void reset_one(int env) {
+  void reset_one(int env) override {
     world_->reset_env(env);
     const std::size_t i = static_cast<std::size_t>(env);
     rewards_[i] = 0;

@@ -11,6 +11,13 @@
 //                          Built twice: with the default rotor capacity (kestrel_stack_cascade)
 //                          and with the allocation library at KESTREL_MAX_ROTORS=4
 //                          (kestrel_stack_cascade_quad), as a quadrotor's firmware would build it;
+//   KESTREL_STACK_CASCADE + KESTREL_STACK_BAKED  (kestrel_stack_cascade_quad_baked) the quad
+//                          build with LeeParams, the allocation model and the desaturation
+//                          parameters generated at build time on the host (baked_cascade.hpp):
+//                          no presets, airframe, pseudo-inverse or reset code on board, the
+//                          desaturation parameters in flash, the allocator and motor states
+//                          constant-initialised; LeeParams, LeeState and the model are copied
+//                          from flash tables into RAM at start-up (Eigen members: see there);
 //   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable).
 // Nothing is printed: the console and its number formatting would count as control stack.
 #include <cstdint>
@@ -22,6 +29,9 @@
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/lee.hpp"
+#endif
+#if defined(KESTREL_STACK_BAKED)
+#include "kestrel_baked_cascade_quad.hpp"
 #endif
 #if defined(KESTREL_STACK_CAPI)
 #include "kestrel/kestrel.h"
@@ -40,6 +50,24 @@ using kestrel::real;
 // What a flight controller keeps between steps: parameters, the allocation model (rebuilt when a
 // motor fails) and the state of each stage. The airframe description is needed only to build
 // the model and the per-step allocation result is an output, so both live on the stack.
+#if defined(KESTREL_STACK_BAKED)
+// Baked: the desaturation parameters are constants in flash; the allocator and motor states hold
+// no Eigen member, so they are constant-initialised (zero, and the baked motor_model_reset result
+// in .data) and need no start-up code. LeeParams, the model and LeeState hold Eigen matrices,
+// which cannot be constant-initialised (baked_cascade.hpp), so they stay in RAM, filled from the
+// flash tables at start-up.
+struct Stack {
+  kestrel::LeeParams lee;
+  kestrel::LeeState lee_state;
+  al::AllocationModel model;
+};
+Stack g_stack;
+al::AllocatorState g_alloc_state;
+al::MotorModelState g_motors = kestrel::baked::kMotorsInitial;
+const al::SequentialDesaturationParams& desat_params(const Stack&) { return kestrel::baked::kDesat; }
+al::AllocatorState& alloc_state(Stack&) { return g_alloc_state; }
+al::MotorModelState& motors(Stack&) { return g_motors; }
+#else
 struct Stack {
   kestrel::LeeParams lee;
   kestrel::LeeState lee_state;
@@ -49,6 +77,10 @@ struct Stack {
   al::MotorModelState motors;
 };
 Stack g_stack;
+const al::SequentialDesaturationParams& desat_params(const Stack& s) { return s.desat; }
+al::AllocatorState& alloc_state(Stack& s) { return s.alloc_state; }
+al::MotorModelState& motors(Stack& s) { return s.motors; }
+#endif
 
 // One control step, the entry point of bench/control/stack_usage.py's static stack bound.
 __attribute__((noinline)) void cascade_step(Stack& s, const real (&in)[13], bool first) {
@@ -62,13 +94,20 @@ __attribute__((noinline)) void cascade_step(Stack& s, const real (&in)[13], bool
   const real cmd[4] = {0, 0, 1, 0};
   const Wrench w = update_lee_position(s.lee, s.lee_state, b, cmd);
   al::AllocationResult alloc_out;
-  (void)al::allocate_sequential_desaturation(s.model, s.desat, s.alloc_state, w, alloc_out);
-  (void)al::motor_model_step(al::kBaseQuadrotorMotors, s.motors, alloc_out.thrust_N, 0.002_r);
-  for (int i = 0; i < 4; ++i) g_out[i] = s.motors.thrust_N[i];
+  (void)al::allocate_sequential_desaturation(s.model, desat_params(s), alloc_state(s), w, alloc_out);
+  (void)al::motor_model_step(al::kBaseQuadrotorMotors, motors(s), alloc_out.thrust_N, 0.002_r);
+  for (int i = 0; i < 4; ++i) g_out[i] = motors(s).thrust_N[i];
 }
 
 __attribute__((noinline)) bool setup(Stack& s) {
   using namespace kestrel;
+#if defined(KESTREL_STACK_BAKED)
+  // The whole set-up: copies of build-time constants (a re-arm would copy them again).
+  baked::load(baked::kLeeBaseQuadrotor, s.lee);
+  baked::load(baked::kLeeStateInitial, s.lee_state);
+  baked::load(baked::kModelBaseQuadrotor, s.model);
+  return true;
+#else
   s.lee = lee_params_base_quadrotor();
   lee_reset(s.lee, s.lee_state);
   al::Airframe airframe;
@@ -78,6 +117,7 @@ __attribute__((noinline)) bool setup(Stack& s) {
   RngStream rng(1, 0, kPurposeMotors);
   const real idle[al::kMaxRotors] = {};
   return al::motor_model_reset(al::kBaseQuadrotorMotors, s.motors, rng, idle) == Status::ok;
+#endif
 }
 }  // namespace
 

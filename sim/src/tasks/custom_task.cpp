@@ -148,14 +148,6 @@ class CustomTask final : public Task, public CustomTaskView {
 
   const char* name() const override { return spec_.id.c_str(); }
 
-  void reset() override {
-    for (int env = 0; env < num_envs_; ++env) reset_one(env);
-  }
-  void reset_idx(const int* env_ids, int count) override {
-    for (int k = 0; k < count; ++k)
-      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
-  }
-
   void step(const float* actions) override {
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
@@ -318,7 +310,7 @@ class CustomTask final : public Task, public CustomTaskView {
     episode_reward_[i] = 0;
   }
 
-  void reset_one(int env) {
+  void reset_one(int env) override {
     reset_env_and_objects(env);
     const std::size_t i = static_cast<std::size_t>(env);
     rewards_[i] = 0;

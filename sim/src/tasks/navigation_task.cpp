@@ -169,15 +169,6 @@ class NavigationTask final : public Task {
 
   const char* name() const override { return "navigation_task"; }
 
-  void reset() override {
-    for (int env = 0; env < num_envs_; ++env) reset_one(env);
-  }
-
-  void reset_idx(const int* env_ids, int count) override {
-    for (int k = 0; k < count; ++k)
-      if (env_ids[k] >= 0 && env_ids[k] < num_envs_) reset_one(env_ids[k]);
-  }
-
   void step(const float* actions) override {
     for (int env = 0; env < num_envs_; ++env) {
       const float* in = actions + static_cast<std::size_t>(env) * kNavActionDim;
@@ -259,7 +250,7 @@ class NavigationTask final : public Task {
     goal_error_vehicle(env, &err_prev_[i * 3]);  // the first "getting closer" of an episode is from its start
   }
 
-  void reset_one(int env) {
+  void reset_one(int env) override {
     world_->reset_env(env);
     const std::size_t i = static_cast<std::size_t>(env);
     rewards_[i] = 0;

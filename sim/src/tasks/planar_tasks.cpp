@@ -105,6 +105,19 @@ class PlanarTaskBase : public Task {
     }
   }
 
+  // The Simulator resets in batches (one reset_idx call for every id), so the planar tasks
+  // override the per-environment defaults of Task.
+ public:
+  void reset() override {
+    std::vector<int> all(static_cast<std::size_t>(num_envs_));  // set-up / explicit reset only, not inside step
+    for (int env = 0; env < num_envs_; ++env) all[static_cast<std::size_t>(env)] = env;
+    reset_envs(all.data(), num_envs_);
+  }
+  void reset_idx(const int* env_ids, int count) override { reset_envs(env_ids, count); }
+
+ protected:
+  void reset_one(int env) override { reset_envs(&env, 1); }
+
   void reset_envs(const int* env_ids, int count) {
     for (int env = 0; env < num_envs_; ++env) ended_[static_cast<std::size_t>(env)] = 0;
     for (int k = 0; k < count; ++k)
@@ -158,13 +171,6 @@ class PlanarNavigationTask final : public PlanarTaskBase {
   }
 
   const char* name() const override { return "navigation_task"; }
-
-  void reset() override {
-    for (int env = 0; env < num_envs_; ++env) reset_ids_[static_cast<std::size_t>(env)] = env;
-    std::vector<int> all(reset_ids_);  // set-up / explicit reset only, not inside step
-    reset_envs(all.data(), num_envs_);
-  }
-  void reset_idx(const int* env_ids, int count) override { reset_envs(env_ids, count); }
 
   void step(const float* actions) override {
     const int ad = sim_->action_dim();
@@ -260,13 +266,6 @@ class PlanarPositionSetpointTask final : public PlanarTaskBase {
   }
 
   const char* name() const override { return "position_setpoint_task"; }
-
-  void reset() override {
-    std::vector<int> all(static_cast<std::size_t>(num_envs_));
-    for (int env = 0; env < num_envs_; ++env) all[static_cast<std::size_t>(env)] = env;
-    reset_envs(all.data(), num_envs_);
-  }
-  void reset_idx(const int* env_ids, int count) override { reset_envs(env_ids, count); }
 
   void step(const float* actions) override {
     const int ad = sim_->action_dim();

@@ -56,10 +56,11 @@ class Task {
   int action_dim() const { return action_dim_; }
 
   /// Resets every environment; observations() then holds the first observations, rewards and
-  /// flags are zero (Aerial Gym's reset() returning the tuple).
-  virtual void reset() = 0;
-  /// Resets the listed environments only (their observation rows are rewritten).
-  virtual void reset_idx(const int* env_ids, int count) = 0;
+  /// flags are zero (Aerial Gym's reset() returning the tuple). Default: reset_one for each.
+  virtual void reset();
+  /// Resets the listed environments only (their observation rows are rewritten); ids outside
+  /// [0, num_envs) are ignored. Default: reset_one for each valid id.
+  virtual void reset_idx(const int* env_ids, int count);
   /// One task step: `actions` is num_envs x action_dim floats (row-major).
   virtual void step(const float* actions) = 0;
   /// The task's built-in scripted controller (what `kestrel run --policy scripted` drives):
@@ -88,6 +89,8 @@ class Task {
   std::uint64_t state_hash() const;
 
  protected:
+  /// Resets one environment (a valid id): new episode, its observation row rewritten.
+  virtual void reset_one(int env) = 0;
   Task(std::unique_ptr<World> world, int obs_dim, int action_dim);
   Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim);
   std::unique_ptr<World> world_;
