@@ -401,6 +401,24 @@ class PlanarSimulator final : public Simulator {
     upper_w = ev.upper;
   }
 
+  bool set_obstacle_box(int env, int asset_class, real cx, real cy, real hx, real hy, real yaw) override {
+    if (env < 0 || env >= num_envs_) return fail("simulator planar: set_obstacle_box: env " + std::to_string(env) + " out of range");
+    if (!(std::isfinite(cx) && std::isfinite(cy) && std::isfinite(yaw) && hx > 0 && hy > 0 && std::isfinite(hx) && std::isfinite(hy)))
+      return fail("simulator planar: set_obstacle_box: expected a finite centre and yaw and positive finite half extents");
+    Env& ev = envs_[static_cast<std::size_t>(env)];
+    for (Slot& sl : ev.slots) {
+      if (static_cast<int>(sl.class_index) != asset_class) continue;
+      if (sl.shape != SlotShape::box)
+        return fail("simulator planar: set_obstacle_box: asset class " + std::to_string(asset_class) + " has circle slots, not boxes");
+      ArenaScope arena(&ev.arena);  // broad-phase buffer growth, if any, goes to the env's arena
+      set_slot(sl, cx, cy, yaw, 0, hx, hy);
+      render_lidar(env);
+      return true;
+    }
+    return fail("simulator planar: set_obstacle_box: asset class " + std::to_string(asset_class) + " has no obstacle slot (" +
+                std::to_string(cfg_.env.assets.size()) + " asset classes)");
+  }
+
   std::uint64_t step_heap_fallbacks() const override {
     std::uint64_t n = 0;
     for (const Env& ev : envs_) n += ev.arena.fallbacks;
@@ -412,14 +430,7 @@ class PlanarSimulator final : public Simulator {
     double err = 0, end_dist = 0, final_dist = 0;
     for (int ei = 0; ei < num_envs_; ++ei) {
       const EnvStats& st = envs_[static_cast<std::size_t>(ei)].stats;
-      s.env_steps += st.env_steps;
-      s.crashes += st.crashes;
-      s.resets += st.resets;
-      s.timeouts += st.timeouts;
-      s.out_of_bounds += st.out_of_bounds;
-      s.episodes_done += st.episodes_done;
-      s.successes += st.successes;
-      s.placement_fallbacks += st.placement_fallbacks;
+      add_env_counters(s, st);
       err += st.tracking_error_sum_m;
       end_dist += st.final_distance_sum_m;
       for (int r = 0; r < robots_per_env_; ++r) final_dist += static_cast<double>(distance_to_target(ei, r));

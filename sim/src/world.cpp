@@ -31,6 +31,21 @@ Vec3 uniform_vec(RngStream& rng, const Vec3& lo, const Vec3& hi) {
 }
 
 void world_task(void* context, int worker) { static_cast<World*>(context)->run_slice(worker); }
+
+/// Puts an environment's obstacles in the broad phase's sweep order (aabb_min_w.x) by insertion
+/// sort: stable, so equal keys keep generation order; O(n) for the nearly sorted list a step
+/// leaves; and unlike std::stable_sort it never allocates a buffer (resets run inside the step).
+void sort_sweep_order(Obstacle* o, int n) {
+  for (int i = 1; i < n; ++i) {
+    Obstacle key = o[i];
+    int j = i - 1;
+    while (j >= 0 && o[j].aabb_min_w[0] > key.aabb_min_w[0]) {
+      o[j + 1] = o[j];
+      --j;
+    }
+    o[j + 1] = key;
+  }
+}
 }  // namespace
 
 int asset_class_slots(const AssetClass& c) {
@@ -340,17 +355,7 @@ void World::generate_layout(int env, RngStream& rng) {
   }
   num_obstacles_[env] = n;
   for (int i = 0; i < n; ++i) shape_aabb(slots[i].shape, slots[i].aabb_min_w, slots[i].aabb_max_w);
-  // Sweep order: insertion sort (stable, so equal keys keep generation order; and unlike
-  // std::stable_sort it never allocates a buffer, as a reset runs inside the step).
-  for (int i = 1; i < n; ++i) {
-    Obstacle key = slots[i];
-    int j = i - 1;
-    while (j >= 0 && slots[j].aabb_min_w[0] > key.aabb_min_w[0]) {
-      slots[j + 1] = slots[j];
-      --j;
-    }
-    slots[j + 1] = key;
-  }
+  sort_sweep_order(slots, n);
 }
 
 bool World::overlaps_obstacle(int env, const Shape& s) const {
@@ -595,16 +600,7 @@ void World::move_obstacles(int env) {
     shape_aabb(o[i].shape, o[i].aabb_min_w, o[i].aabb_max_w);
   }
   if (!moved) return;
-  // Insertion sort keeps the sweep order: O(n) for the nearly sorted list, no allocation.
-  for (int i = 1; i < n; ++i) {
-    Obstacle key = o[i];
-    int j = i - 1;
-    while (j >= 0 && o[j].aabb_min_w[0] > key.aabb_min_w[0]) {
-      o[j + 1] = o[j];
-      --j;
-    }
-    o[j + 1] = key;
-  }
+  sort_sweep_order(o, n);
 }
 
 void World::collide_robots(int env) {
@@ -790,16 +786,9 @@ WorldSummary World::summary() const {
   double err = 0, final_dist = 0, end_dist = 0;
   for (int env = 0; env < num_envs_; ++env) {
     const EnvStats& e = stats_[env];
-    s.env_steps += e.env_steps;
-    s.crashes += e.crashes;
-    s.resets += e.resets;
-    s.timeouts += e.timeouts;
-    s.out_of_bounds += e.out_of_bounds;
-    s.episodes_done += e.episodes_done;
-    s.successes += e.successes;
+    add_env_counters(s, e);
     err += e.tracking_error_sum_m;
     end_dist += e.final_distance_sum_m;
-    s.placement_fallbacks += e.placement_fallbacks;
     for (int r = 0; r < robots_per_env_; ++r)
       final_dist += static_cast<double>((target_w_[index(env, r)] - state_[index(env, r)].position_w).norm());
   }
@@ -1006,15 +995,7 @@ void World::obstacles_changed(int env) {
   Obstacle* o = obstacles_.data() + static_cast<std::size_t>(env) * obstacle_capacity_;
   const int n = num_obstacles_[env];
   for (int i = 0; i < n; ++i) shape_aabb(o[i].shape, o[i].aabb_min_w, o[i].aabb_max_w);
-  for (int i = 1; i < n; ++i) {  // insertion sort, as generate_layout (stable, no buffer)
-    Obstacle key = o[i];
-    int j = i - 1;
-    while (j >= 0 && o[j].aabb_min_w[0] > key.aabb_min_w[0]) {
-      o[j + 1] = o[j];
-      --j;
-    }
-    o[j + 1] = key;
-  }
+  sort_sweep_order(o, n);
   if (any_ray_sensor_) render_ray_sensors(env, true);
 }
 

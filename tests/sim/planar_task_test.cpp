@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "heap_counter.hpp"
+#include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
@@ -260,12 +261,16 @@ TEST(PlanarPositionSetpointTask, RewardRisesUnderScriptedNotZero) {
 
 TEST(PlanarTasks, ErrorsForTasksThatDoNotApply) {
   std::string err;
-  // The worked custom task: named objects and a 3-D goal box.
+  // The worked custom task on the ground vehicle (its actions are [speed, steering]).
   WorldConfig c;
-  ASSERT_TRUE(load_scenario_string("task: goal_box_through_gap\n", "gb.yaml", c, err)) << err;
+  ASSERT_TRUE(load_scenario_string("task: goal_box_through_gap\nsimulator: {name: planar, vehicle: ground_vehicle}\n", "gb.yaml", c, err)) << err;
   EXPECT_FALSE(make_task(c, Backend::planar, err));
-  EXPECT_NE(err.find("simulator planar"), std::string::npos) << err;
-  EXPECT_NE(err.find("goal_box_through_gap"), std::string::npos) << err;
+  EXPECT_NE(err.find("simulator planar: task goal_box_through_gap"), std::string::npos) << err;
+  EXPECT_NE(err.find("ground vehicle"), std::string::npos) << err;
+  // ... and with a controller the fixed-altitude multirotor cannot run for it.
+  ASSERT_TRUE(load_scenario_string("task: goal_box_through_gap\ncontroller: lee_attitude_control\n", "gb.yaml", c, err)) << err;
+  EXPECT_FALSE(make_task(c, Backend::planar, err));
+  EXPECT_NE(err.find("lee_attitude_control is not supported"), std::string::npos) << err;
   EXPECT_NE(err.find("use simulator: rigid"), std::string::npos) << err;
   // The ground vehicle.
   c = planar_nav(2, 1);
@@ -340,4 +345,177 @@ TEST(PlanarTasks, SimulatorAutoResetOffFlagsButKeepsTheState) {
     EXPECT_EQ(s->reset_buf()[1], 1) << backend_name(b);
     EXPECT_LT(s->base_pos_w()[3], hi[0]) << backend_name(b);  // reset inside the step
   }
+}
+
+// ---- goal_box_through_gap on planar -------------------------------------------------------------
+
+namespace {
+
+const std::string kGoalBoxScenario = std::string(KESTREL_SIM_TEST_DIR) + "/../../sim/scenarios/planar_goal_box_through_gap.yaml";
+
+WorldConfig planar_goal_box(int num_envs, std::uint64_t seed, int threads = 2) {
+  WorldConfig c;
+  std::string err;
+  EXPECT_TRUE(load_scenario_file(kGoalBoxScenario, c, err)) << err;
+  c.env.num_envs = num_envs;
+  c.num_threads = threads;
+  c.seed = seed;
+  return c;
+}
+
+// Flies env 0 from (x0, y) along +x with the relative setpoint (+1 m, 0) until x passes x_stop or
+// the episode ends; returns the crashes counted.
+std::uint64_t fly_along_x(Task& t, real x0, real y, real x_stop) {
+  place(t, 0, x0, y);
+  std::vector<float> a(static_cast<std::size_t>(t.num_envs()) * 4, 0.0f);
+  a[0] = 1.0f;
+  const std::uint64_t crashes = t.infos().crashes, episodes = t.infos().episodes;
+  for (int k = 0; k < 400; ++k) {
+    t.step(a.data());
+    if (t.infos().episodes != episodes || t.simulator()->base_pos_w()[0] > x_stop) break;
+  }
+  return t.infos().crashes - crashes;
+}
+
+}  // namespace
+
+TEST(PlanarGoalBox, GapMovesWithinItsRangeDeterministically) {
+  auto t = build(planar_goal_box(2, 21));
+  auto u = build(planar_goal_box(2, 21));
+  ASSERT_TRUE(t && u);
+  EXPECT_STREQ(t->backend_name(), "planar");
+  EXPECT_EQ(t->obs_dim(), 36);  // as on rigid: 3 + 3 + 4 + 3 + 3 + 4 + 4 x 4
+  const CustomTaskView* v = custom_task_view(*t);
+  const CustomTaskView* w = custom_task_view(*u);
+  ASSERT_TRUE(v && w);
+  std::vector<real> gaps;
+  for (int k = 0; k < 12; ++k) {
+    const Vec3 gap = v->object_centre(0, "gap");
+    const Vec3 left = v->object_centre(0, "wall_left"), right = v->object_centre(0, "wall_right");
+    EXPECT_GE(gap[1], -1.2_r);
+    EXPECT_LE(gap[1], 1.2_r);
+    EXPECT_EQ(gap[2], 1.2_r);  // the drawn 3-D centre is reported (the terms see it at the altitude)
+    const real width = (right[1] - 4) - (left[1] + 4);  // inner edges of the two 8 m halves
+    EXPECT_GE(width, 0.9_r - 1e-5_r);
+    EXPECT_LE(width, 1.2_r + 1e-5_r);
+    EXPECT_NEAR((left[1] + right[1]) / 2, gap[1], 1e-5_r);  // the gap marker is centred between the halves
+    EXPECT_EQ(gap[1], w->object_centre(0, "gap")[1]);       // same seed, same draws
+    EXPECT_NE(gap[1], v->object_centre(1, "gap")[1]);       // each env its own stream
+    // The position error to the gap is horizontal (z 0 at the fixed altitude).
+    EXPECT_EQ(t->observations()[2], 0.0f);
+    gaps.push_back(gap[1]);
+    const int env = 0;
+    t->reset_idx(&env, 1);
+    u->reset_idx(&env, 1);
+  }
+  std::sort(gaps.begin(), gaps.end());
+  EXPECT_GT(gaps.back() - gaps.front(), 0.8_r);  // it moves between resets
+}
+
+TEST(PlanarGoalBox, WallIsSolidAndTheGapOpen) {
+  auto t = build(planar_goal_box(1, 22));
+  ASSERT_TRUE(t);
+  const CustomTaskView* v = custom_task_view(*t);
+  ASSERT_TRUE(v);
+  // Through the gap: no crash up to 0.8 m behind the wall.
+  Vec3 gap = v->object_centre(0, "gap");
+  EXPECT_EQ(fly_along_x(*t, -1.0_r, gap[1], 0.8_r), 0u);
+  EXPECT_GT(t->simulator()->base_pos_w()[0], 0.8_r);
+  // At a wall segment 1.8 m beside the gap's centre (at least 1.2 m from its edge): a crash.
+  const int env = 0;
+  t->reset_idx(&env, 1);
+  gap = v->object_centre(0, "gap");
+  const real y = gap[1] > 0 ? gap[1] - 1.8_r : gap[1] + 1.8_r;
+  EXPECT_EQ(fly_along_x(*t, -1.0_r, y, 0.8_r), 1u);
+  EXPECT_EQ(t->infos().crashes, 1u);
+}
+
+TEST(PlanarGoalBox, InsideBoxChecksXYOnly) {
+  auto t = build(planar_goal_box(1, 23));
+  ASSERT_TRUE(t);
+  const CustomTaskView* v = custom_task_view(*t);
+  ASSERT_TRUE(v);
+  const Vec3 box = v->object_centre(0, "goal_box");
+  // At 1.2 m the robot is 1.2 m above the box's floor, over the rigid height threshold (1 m): on
+  // planar the x / y ranges alone decide.
+  place(*t, 0, box[0] + 0.4_r, box[1] - 0.4_r);
+  EXPECT_EQ(v->evaluate_terminations(0), 1);
+  place(*t, 0, box[0] + 0.6_r, box[1]);
+  EXPECT_EQ(v->evaluate_terminations(0), 0);
+}
+
+TEST(PlanarGoalBox, ScriptedReachesTheBoxZeroNever) {
+  auto s = build(planar_goal_box(8, 24));
+  auto z = build(planar_goal_box(8, 24));
+  ASSERT_TRUE(s && z);
+  std::vector<float> a(8 * 4, 0.0f), zero(8 * 4, 0.0f);
+  for (int k = 0; k < 1500; ++k) {
+    ASSERT_TRUE(s->scripted_actions(a.data()));
+    s->step(a.data());
+    z->step(zero.data());
+  }
+  EXPECT_GE(s->infos().episodes, 8u);
+  EXPECT_GE(s->infos().successes * 10, s->infos().episodes * 8);  // most episodes
+  EXPECT_GT(s->infos().mean_episode_reward(), 5.0);
+  EXPECT_EQ(z->infos().successes, 0u);
+  EXPECT_EQ(z->infos().truncations, 8u);  // hovering in front of the wall until the timeout
+  EXPECT_EQ(z->infos().crashes, 0u);
+}
+
+TEST(PlanarGoalBox, NoHeapInsideStep) {
+  WorldConfig c = planar_goal_box(8, 25, 1);
+  c.task.episode_len_env_steps = 200;  // resets (wall moves) inside the counted steps
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  std::vector<float> a(8 * 4, 0.0f);
+  for (int k = 0; k < 600; ++k) {
+    ASSERT_TRUE(t->scripted_actions(a.data()));
+    t->step(a.data());
+  }
+  const std::uint64_t episodes = t->infos().episodes;
+  kestrel::test::HeapCounter counter;
+  for (int k = 0; k < 400; ++k) {
+    (void)t->scripted_actions(a.data());
+    t->step(a.data());
+  }
+  EXPECT_EQ(counter.allocations(), 0u);
+  EXPECT_EQ(t->simulator()->step_heap_fallbacks(), 0u);
+  EXPECT_GE(t->infos().episodes - episodes, 8u);
+}
+
+TEST(PlanarGoalBox, SameResultForAnyThreadCount) {
+  auto t1 = build(planar_goal_box(6, 26, 1));
+  auto t2 = build(planar_goal_box(6, 26, 2));
+  ASSERT_TRUE(t1 && t2);
+  EXPECT_EQ(t1->num_threads(), 1);
+  EXPECT_EQ(t2->num_threads(), 2);
+  std::vector<float> a(6 * 4);
+  for (int k = 0; k < 900; ++k) {
+    ASSERT_TRUE(t1->scripted_actions(a.data()));
+    t1->step(a.data());
+    t2->step(a.data());
+  }
+  EXPECT_EQ(t1->state_hash(), t2->state_hash());
+  for (int i = 0; i < 6 * t1->obs_dim(); ++i) ASSERT_EQ(t1->observations()[i], t2->observations()[i]) << i;
+  EXPECT_EQ(t1->infos().successes, t2->infos().successes);
+  EXPECT_GT(t1->infos().successes, 0u);
+}
+
+TEST(PlanarGoalBox, SetObstacleBoxRefusals) {
+  auto t = build(planar_goal_box(1, 27));
+  ASSERT_TRUE(t);
+  Simulator* s = t->simulator();
+  EXPECT_FALSE(s->set_obstacle_box(1, 0, 0, 0, 1, 1, 0));
+  EXPECT_NE(s->last_error().find("env 1 out of range"), std::string::npos) << s->last_error();
+  EXPECT_FALSE(s->set_obstacle_box(0, 0, 0, 0, -1, 1, 0));
+  EXPECT_NE(s->last_error().find("positive finite half extents"), std::string::npos) << s->last_error();
+  EXPECT_FALSE(s->set_obstacle_box(0, 99, 0, 0, 1, 1, 0));
+  EXPECT_NE(s->last_error().find("no obstacle slot"), std::string::npos) << s->last_error();
+  std::string err;
+  WorldConfig c = planar_goal_box(1, 27);
+  c.simulator.lidar_beams = 0;
+  auto rigid = make_simulator(c, Backend::rigid, err);
+  ASSERT_TRUE(rigid) << err;
+  EXPECT_FALSE(rigid->set_obstacle_box(0, 0, 0, 0, 1, 1, 0));
+  EXPECT_NE(rigid->last_error().find("simulator rigid"), std::string::npos) << rigid->last_error();
 }

@@ -22,12 +22,15 @@ void goal_box_scripted(const CustomTaskSpec&, const Vec3& p, const Vec3* c, floa
   const Vec3& gap = c[2];
   const Vec3& box = c[3];
   const real wall_x = gap[0];
+  // The gap marker's height is the pass height (kPassHeight on rigid; the planar task gives the
+  // objects at its flight altitude, where the vertical part of the targets is dropped anyway).
+  const real pass_z = gap[2];
   Vec3 target;
-  const bool aligned = std::fabs(p[1] - gap[1]) < 0.12_r && std::fabs(p[2] - kPassHeight) < 0.2_r;
+  const bool aligned = std::fabs(p[1] - gap[1]) < 0.12_r && std::fabs(p[2] - pass_z) < 0.2_r;
   if (p[0] > wall_x + 0.4_r) target = Vec3(box[0], box[1], 0.6_r);                 // behind the wall: into the box
   else if (std::fabs(p[0] - wall_x) < 0.4_r || (aligned && p[0] > wall_x - 0.9_r))  // in or lined up: through
-    target = Vec3(wall_x + 0.8_r, gap[1], kPassHeight);
-  else target = Vec3(wall_x - 0.7_r, gap[1], kPassHeight);                          // line up in front of it
+    target = Vec3(wall_x + 0.8_r, gap[1], pass_z);
+  else target = Vec3(wall_x - 0.7_r, gap[1], pass_z);                               // line up in front of it
   Vec3 d = target - p;
   const real n = d.norm();
   if (n > 1) d /= n;  // a carrot at most 1 m ahead keeps the Lee response on the straight line

@@ -30,18 +30,26 @@
 //   - Terminations as on rigid: contact crash (force above the env's threshold), out of the bounds
 //     (0.5 m margin; x and y only, z is the fixed altitude), the tasks' own rules; truncation at
 //     episode_len_env_steps.
-// Not here: custom tasks (goal_box_through_gap: named objects placed by pose ranges, a goal box
-// with a height threshold; the planar layouts are asset classes drawn in the bounds) and the
-// ground vehicle (actions [speed, steering], not the tasks' multirotor actions): make_planar_task
-// refuses them naming the backend and the alternative.
+//   - custom tasks (goal_box_through_gap; PlanarCustomTask below): lee_position_control or
+//     lee_velocity_control; the spec's solid objects are task-owned box slots (one asset class
+//     each, reserved at creation) that on_reset moves with Simulator::set_obstacle_box after the
+//     randomisation terms (the same functions and per-env stream as on rigid,
+//     custom_task_terms.hpp); the terms see the objects at the flight altitude, so position errors
+//     have z 0, distances are horizontal and inside_box checks x / y only (a height threshold
+//     cannot apply at a fixed altitude); image_pool pools the 2-D lidar into one row of
+//     rows * cols sectors (the same observation size as on rigid).
+// Not here: the ground vehicle (actions [speed, steering], not the tasks' multirotor actions):
+// make_planar_task refuses it naming the backend and the alternative.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
+#include "custom_task_terms.hpp"
 #include "navigation_common.hpp"
 #include "task_access.hpp"
 
@@ -353,6 +361,165 @@ class PlanarPositionSetpointTask final : public PlanarTaskBase {
   real altitude_m_ = 1;
 };
 
+// ---- custom tasks (goal_box_through_gap) ---------------------------------------------------------
+
+/// A custom task on the fixed-altitude multirotor: the spec's terms evaluated by the same
+/// functions as on the World (custom_task_terms.hpp), its solid objects in task-owned box slots
+/// (Simulator::set_obstacle_box, one asset class per object), its randomisation drawn from the
+/// same per-env stream RngStream(seed, env, kPurposeTaskRandomise). The terms see the objects at
+/// the flight altitude (their z replaced by simulator.altitude_m): position errors have z 0,
+/// distances are horizontal, and inside_box checks x / y only (the height threshold does not
+/// apply: the robot cannot descend into the box). object_centre() reports the drawn 3-D centres.
+class PlanarCustomTask final : public PlanarTaskBase, public CustomTaskView {
+ public:
+  PlanarCustomTask(std::unique_ptr<Simulator> s, const CustomTaskSpec& spec, std::vector<int> slot_class)
+      : PlanarTaskBase(std::move(s), custom_terms::obs_dim(spec), custom_terms::kActionDim),
+        spec_(spec),
+        res_(spec_),
+        slot_class_(std::move(slot_class)) {
+    const std::size_t n = static_cast<std::size_t>(num_envs_), no = spec_.objects.size();
+    centres_.assign(n * no, Vec3::Zero());
+    flat_.assign(n * no, Vec3::Zero());
+    prev_dist_.assign(n * spec_.rewards.size(), 0.0f);
+    action_.assign(n * kAd, 0.0f);
+    action_prev_.assign(n * kAd, 0.0f);
+    rng_.resize(n);
+    for (std::size_t e = 0; e < n; ++e) rng_[e] = RngStream(sim_->config().seed, static_cast<std::uint32_t>(e), kPurposeTaskRandomise);
+    kind_ = sim_->config().controller.kind;
+    altitude_m_ = sim_->config().simulator.altitude_m;
+    beams_ = sim_->lidar_beams();
+    left_to_right_.assign(static_cast<std::size_t>(beams_), 0);
+    max_range_m_ = sim_->config().simulator.lidar_max_range_m;
+    reset();
+  }
+
+  const char* name() const override { return spec_.id.c_str(); }
+
+  void step(const float* actions) override {
+    const int ad = sim_->action_dim();
+    for (int env = 0; env < num_envs_; ++env) {
+      const std::size_t i = static_cast<std::size_t>(env);
+      float* cur = &action_[i * kAd];
+      float* prev = &action_prev_[i * kAd];
+      for (int k = 0; k < kAd; ++k) prev[k] = cur[k];
+      custom_terms::clip_action(spec_, kind_, actions + i * kAd, cur);
+      cur[2] = 0.0f;  // the altitude is held: no vertical command (nor its action-rate penalty)
+      real* a = &sim_actions_[i * static_cast<std::size_t>(ad)];
+      const real* p = sim_->base_pos_w() + 3 * env;
+      if (kind_ == ControllerKind::lee_position) {  // offsets from the current position, as on rigid
+        a[0] = p[0] + static_cast<real>(cur[0]);
+        a[1] = p[1] + static_cast<real>(cur[1]);
+        a[2] = altitude_m_;
+        a[3] = static_cast<real>(cur[3]);
+      } else {  // lee_velocity
+        a[0] = static_cast<real>(cur[0] * spec_.max_speed_m_s);
+        a[1] = static_cast<real>(cur[1] * spec_.max_speed_m_s);
+        a[2] = 0;
+        a[3] = static_cast<real>(cur[3] * spec_.max_yaw_rate_rad_s);
+      }
+    }
+    sim_->step(sim_actions_.data());
+    ++infos_.steps;
+    for (int env = 0; env < num_envs_; ++env) {
+      const std::size_t i = static_cast<std::size_t>(env);
+      ++episode_step_[i];
+      const int why = evaluate_terminations(env);
+      const bool success = why == 1, crash = why == 2, timeout = why == 3;
+      const float r = custom_terms::reward(spec_, res_, flat(env), position(env), success, crash, &action_[i * kAd],
+                                           &action_prev_[i * kAd], &prev_dist_[i * spec_.rewards.size()]);
+      rewards_[i] = r;
+      terminations_[i] = (success || crash) ? 1 : 0;
+      truncations_[i] = timeout ? 1 : 0;
+      episode_reward_[i] += static_cast<double>(r);
+      ended_[i] = why != 0 ? 1 : 0;
+      if (ended_[i]) custom_terms::count_episode(why, episode_reward_[i], infos_);
+    }
+    reset_ended();
+    for (int env = 0; env < num_envs_; ++env) write_obs(env);
+  }
+
+  bool scripted_actions(float* actions) const override {
+    if (!spec_.scripted) return false;
+    for (int env = 0; env < num_envs_; ++env) {
+      float* a = actions + static_cast<std::size_t>(env) * kAd;
+      spec_.scripted(spec_, position(env), flat(env), a);
+      a[2] = 0.0f;
+    }
+    return true;
+  }
+
+  Vec3 object_centre(int env, const std::string& name) const override {
+    return custom_terms::object_centre(spec_, centres_, num_envs_, env, name);
+  }
+
+  int evaluate_terminations(int env) const override {
+    return custom_terms::evaluate_terminations(spec_, res_, flat(env), position(env), false, crash_or_out(env),
+                                               episode_step_[static_cast<std::size_t>(env)] >= len_);
+  }
+
+ private:
+  static constexpr int kAd = custom_terms::kActionDim;
+
+  Vec3 position(int env) const {
+    const real* p = sim_->base_pos_w() + 3 * env;
+    return Vec3(p[0], p[1], p[2]);
+  }
+  const Vec3* flat(int env) const {
+    return spec_.objects.empty() ? nullptr : &flat_[static_cast<std::size_t>(env) * spec_.objects.size()];
+  }
+
+  // After the Simulator's reset of env: the randomisation terms move the objects and the solid
+  // ones are written into their box slots (the lidar is re-rendered by set_obstacle_box).
+  void on_reset(int env) override {
+    const std::size_t i = static_cast<std::size_t>(env), no = spec_.objects.size();
+    Vec3* c = no ? &centres_[i * no] : nullptr;
+    custom_terms::randomize_objects(spec_, res_, rng_[i], c);
+    for (std::size_t k = 0; k < no; ++k) {
+      flat_[i * no + k] = Vec3(c[k][0], c[k][1], altitude_m_);
+      if (slot_class_[k] < 0) continue;
+      const Vec3& h = spec_.objects[k].half_extents_m;
+      // Checked at creation (positive finite extents, finite centres, box slots), so this holds.
+      const bool ok = sim_->set_obstacle_box(env, slot_class_[k], c[k][0], c[k][1], h[0], h[1], 0);
+      (void)ok;
+    }
+    custom_terms::reset_progress(spec_, res_, flat(env), position(env), &prev_dist_[i * spec_.rewards.size()]);
+    for (int a = 0; a < kAd; ++a) action_[i * kAd + a] = action_prev_[i * kAd + a] = 0;
+  }
+
+  void write_obs(int env) override {
+    const std::size_t i = static_cast<std::size_t>(env);
+    custom_terms::ObsInput in;
+    in.position_w = position(env);
+    const real* q = sim_->base_quat_xyzw() + 4 * env;
+    in.orientation_wb = Quat(q[3], q[0], q[1], q[2]);  // wxyz constructor
+    for (int k = 0; k < 3; ++k) in.linvel_b[k] = sim_->base_lin_vel_b()[3 * i + k];
+    for (int k = 0; k < 3; ++k) in.angvel_b[k] = sim_->base_ang_vel_b()[3 * i + k];
+    in.action = &action_[i * kAd];
+    if (beams_ > 0) {
+      // Beam k is at -fov/2 + k fov/(beams-1) (clockwise first): reversed, column 0 is the leftmost.
+      const real* ranges = sim_->lidar_ranges_m() + i * static_cast<std::size_t>(beams_);
+      for (int k = 0; k < beams_; ++k) left_to_right_[static_cast<std::size_t>(k)] = ranges[beams_ - 1 - k];
+      in.ranges = left_to_right_.data();
+      in.height = 1;
+      in.width = beams_;
+    }
+    in.max_range_m = max_range_m_;
+    custom_terms::write_obs(spec_, res_, flat(env), in, &obs_[i * static_cast<std::size_t>(obs_dim_)]);
+  }
+
+  CustomTaskSpec spec_;
+  custom_terms::Resolved res_;
+  std::vector<int> slot_class_;  // per object: its asset class index (solid), -1 (region)
+  ControllerKind kind_ = ControllerKind::lee_position;
+  real altitude_m_ = 1, max_range_m_ = 1;
+  int beams_ = 0;
+  std::vector<Vec3> centres_, flat_;  // envs x objects: drawn centres, and at the flight altitude
+  std::vector<float> prev_dist_;      // envs x reward terms (progress_to)
+  std::vector<float> action_, action_prev_;
+  std::vector<RngStream> rng_;
+  std::vector<real> left_to_right_;
+};
+
 /// Checks what every planar task needs and builds the Simulator (3-D sensors dropped, the 2-D
 /// lidar as given).
 std::unique_ptr<Simulator> planar_task_simulator(const WorldConfig& config, const std::string& id, WorldConfig& wc,
@@ -362,7 +529,7 @@ std::unique_ptr<Simulator> planar_task_simulator(const WorldConfig& config, cons
     error = pre + "needs robots_per_env = 1";
     return nullptr;
   }
-  if (config.task.kind != TaskKind::position_setpoint) {
+  if (config.task.kind != TaskKind::position_setpoint && !custom_tasks().has(id)) {
     error = pre + "needs a position_setpoint task kind (a goal per episode)";
     return nullptr;
   }
@@ -415,6 +582,31 @@ std::unique_ptr<Task> make_planar_navigation_task(const WorldConfig& config, con
   return std::unique_ptr<Task>(new PlanarNavigationTask(std::move(s), params));
 }
 
+std::unique_ptr<Task> make_planar_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, std::string& error) {
+  if (!custom_terms::check_spec(spec, error)) return nullptr;
+  const std::string where = "simulator planar: custom task " + spec.id + ": ";
+  WorldConfig wc;
+  std::vector<int> slot_class;
+  if (!custom_terms::prepare_config(config, spec, {ControllerKind::lee_position, ControllerKind::lee_velocity},
+                                    "lee_position_control or lee_velocity_control (the fixed-altitude multirotor), or use "
+                                    "simulator: rigid",
+                                    where, wc, slot_class, error))
+    return nullptr;
+  int cells = 0;
+  for (const ObservationTerm& t : spec.observations)
+    if (t.kind == ObsTermKind::image_pool) cells = std::max(cells, t.rows * t.cols);
+  if (cells > 0 && wc.simulator.lidar_beams == 0) wc.simulator.lidar_beams = std::max(kPlanarDefaultLidarBeams, cells);
+  if (wc.simulator.lidar_beams < cells) {
+    error = where + "simulator.lidar_beams (" + std::to_string(wc.simulator.lidar_beams) + ") must be at least the " +
+            std::to_string(cells) + " pooled sectors of the image_pool observation (rows x cols)";
+    return nullptr;
+  }
+  WorldConfig built;
+  std::unique_ptr<Simulator> s = planar_task_simulator(wc, spec.id, built, error);
+  if (!s) return nullptr;
+  return std::unique_ptr<Task>(new PlanarCustomTask(std::move(s), spec, std::move(slot_class)));
+}
+
 std::unique_ptr<Task> make_planar_task(const WorldConfig& config, std::string& error) {
   const std::string& id = config.task.name;
   if (id == "navigation_task") return make_planar_navigation_task(config, NavigationParams(), error);
@@ -432,10 +624,9 @@ std::unique_ptr<Task> make_planar_task(const WorldConfig& config, std::string& e
     return std::unique_ptr<Task>(new PlanarPositionSetpointTask(std::move(s)));
   }
   if (custom_tasks().has(id)) {
-    error = "simulator planar: custom task " + id +
-            " places named objects by pose ranges and ends on a 3-D goal box (x/y ranges and a height threshold); the "
-            "planar backend's obstacles are asset classes drawn in the bounds; use simulator: rigid";
-    return nullptr;
+    CustomTaskSpec spec;
+    custom_tasks().make(id, spec);
+    return make_planar_custom_task(config, spec, error);
   }
   error = "unknown task '" + id + "'; registered task ids: " + rl_task_ids_joined();
   return nullptr;

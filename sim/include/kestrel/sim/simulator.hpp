@@ -137,6 +137,22 @@ class Simulator {
   /// Beam k's angle in the body frame (rad, counter-clockwise from body x).
   real lidar_beam_angle(int k) const;
 
+  /// Task-owned box obstacles (planar): puts the box of asset class `asset_class` (its first
+  /// slot; the task reserves the class at creation, e.g. a cube class with keep_in_env and one
+  /// asset) at centre (center_x_w, center_y_w), half extents (half_x_m, half_y_m), yaw yaw_rad,
+  /// from now on (until the next call or the class's next layout draw), and re-renders env's
+  /// lidar. Edits the slot's pre-created Box2D fixture (no heap). False (nothing changed,
+  /// last_error() says why) for a bad env / class, a class without box slots, or non-finite or
+  /// non-positive sizes; always false on rigid, whose tasks move World obstacles (World::obstacle
+  /// + obstacles_changed).
+  [[nodiscard]] virtual bool set_obstacle_box(int env, int asset_class, real center_x_w, real center_y_w, real half_x_m,
+                                              real half_y_m, real yaw_rad) {
+    (void)env, (void)asset_class, (void)center_x_w, (void)center_y_w, (void)half_x_m, (void)half_y_m, (void)yaw_rad;
+    return fail(std::string("simulator ") + backend_name() +
+                ": set_obstacle_box applies to the planar backend's task-owned slots; on rigid a task moves World "
+                "obstacles (World::obstacle, World::obstacles_changed)");
+  }
+
   /// In-step allocations that found their environment's fixed arena full and went to the heap
   /// (planar: Box2D's growth; see planar.cpp). 0 on rigid, which never allocates in a step.
   virtual std::uint64_t step_heap_fallbacks() const { return 0; }

@@ -107,9 +107,10 @@ class Task {
 /// run` does). Returns nullptr and a message (listing the task ids) for an unknown task or a bad config.
 std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error);
 /// The same on an explicit backend: rigid is make_task above; planar builds the task on the Box2D
-/// backend (sim/src/tasks/planar_tasks.cpp: navigation_task and position_setpoint_task on the
-/// fixed-altitude multirotor), or nullptr and a message naming the backend and the alternative
-/// for a task that does not apply there (custom tasks, the ground vehicle).
+/// backend (sim/src/tasks/planar_tasks.cpp: navigation_task, position_setpoint_task and the
+/// custom tasks such as goal_box_through_gap on the fixed-altitude multirotor), or nullptr and a
+/// message naming the backend and the alternative for a task that does not apply there (the
+/// ground vehicle, attitude or rate controllers).
 std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error);
 /// True if config.task.name names a Task (rather than the World's built-in scripted tasks).
 bool is_rl_task(const std::string& task_name);

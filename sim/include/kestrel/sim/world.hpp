@@ -76,6 +76,19 @@ struct WorldSummary {
   double episode_end_distance_m = 0; // mean distance to target when an episode ends (any reason)
 };
 
+/// Adds one environment's event counters to a summary's totals (both backends summarise this way;
+/// the error and distance means are the caller's).
+inline void add_env_counters(WorldSummary& s, const EnvStats& e) {
+  s.env_steps += e.env_steps;
+  s.crashes += e.crashes;
+  s.resets += e.resets;
+  s.timeouts += e.timeouts;
+  s.out_of_bounds += e.out_of_bounds;
+  s.episodes_done += e.episodes_done;
+  s.successes += e.successes;
+  s.placement_fallbacks += e.placement_fallbacks;
+}
+
 class World {
  public:
   /// Builds a world from a validated config. Returns nullptr and a message on bad parameters;
