@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages Kestrel needs, only those that are missing. Sourced by the
 # quick-start scripts; safe to run again.
 set -eu
-KESTREL_PACKAGES="build-essential cmake ninja-build pkg-config libeigen3-dev libgtest-dev libgmock-dev \
+KESTREL_PACKAGES="build-essential cmake ninja-build pkg-config python3 libeigen3-dev libgtest-dev libgmock-dev \
 libbenchmark-dev gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib \
 binutils-arm-none-eabi qemu-system-arm qemu-system-misc gcc-riscv64-unknown-elf picolibc-riscv64-unknown-elf \
 libembree-dev libfcl-dev libccd-dev libyaml-cpp-dev libbox2d-dev libpng-dev libmujoco-dev libtinyxml2-dev"
