@@ -661,9 +661,9 @@ struct CascadeBench : Batched<CascadeBench> {
       firmware::FlightStack& s = lanes[i].stack;
       if (firmware::flight_init(s, plant) != Status::ok) std::fprintf(stderr, "bench_micro: flight_init failed\n");
       real hover[al::kMaxRotors] = {};
-      for (int m = 0; m < 4; ++m) hover[m] = s.lee.mass_kg * kStandardGravity / 4;
+      for (int m = 0; m < 4; ++m) hover[m] = s.model.ctrl.lee.mass_kg * kStandardGravity / 4;
       RngStream r(kSeed, static_cast<std::uint32_t>(i), kPurposeMotors);
-      if (al::motor_model_reset(s.motor_cfg, s.motors, r, hover) != Status::ok)
+      if (al::motor_model_reset(s.model.motors, s.state.motors, r, hover) != Status::ok)
         std::fprintf(stderr, "bench_micro: motor_model_reset failed\n");
     }
     for (std::size_t j = 0; j < inputs.size(); ++j) {
@@ -679,8 +679,9 @@ struct CascadeBench : Batched<CascadeBench> {
   std::string check() {
     for (std::size_t i = 0; i < lanes.size(); ++i) {
       const firmware::FlightStack& s = lanes[i].stack;
-      if (!all_finite(s.motors.thrust_N, 4) || !all_finite(s.alloc_out.thrust_N, 4)) return fail("thrusts", i);
-      if (!(s.motors.thrust_N[0] + s.motors.thrust_N[1] + s.motors.thrust_N[2] + s.motors.thrust_N[3] > 0))
+      const real* f = s.state.motors.thrust_N;
+      if (!all_finite(f, 4) || !all_finite(s.out.allocation.thrust_N, 4)) return fail("thrusts", i);
+      if (!(f[0] + f[1] + f[2] + f[3] > 0))
         return fail("no thrust", i);
     }
     return {};

@@ -12,25 +12,27 @@ namespace kestrel::firmware {
 namespace al = kestrel::allocation;
 
 Status flight_init(FlightStack& s, Plant& p) {
-  s.lee = lee_params_base_quadrotor();
-  if (const Status st = validate_lee_params(s.lee); st != Status::ok) return st;
-  lee_reset(s.lee, s.lee_state);
-  if (const Status st = al::make_airframe(al::kBaseQuadrotor, s.airframe); st != Status::ok) return st;
+  robots::MultirotorModel& m = s.model;
+  m.controller = ControllerKind::lee_position;
+  m.ctrl.lee = lee_params_base_quadrotor();
+  if (const Status st = al::make_airframe(al::kBaseQuadrotor, m.airframe); st != Status::ok) return st;
   // The quad's effectiveness matrix has rank 4 (no lateral force): build_allocation_model reports
   // that as Status::singular, which is expected and harmless for a quadrotor.
-  const Status am = al::build_allocation_model(s.airframe, s.alloc_model);
+  const Status am = al::build_allocation_model(m.airframe, m.allocation);
   if (am != Status::ok && am != Status::singular) return am;
-  al::reset_allocator(s.alloc_state);
-  s.desat = al::SequentialDesaturationParams();
-  s.motor_cfg = al::kBaseQuadrotorMotors;
+  m.allocator = robots::AllocatorKind::sequential_desaturation;
+  m.desat = al::SequentialDesaturationParams();
+  m.motors = al::kBaseQuadrotorMotors;
+  m.use_motor_model = true;
+  if (const Status st = robots::finish_multirotor_model(m); st != Status::ok) return st;
   RngStream rng(1, 0, kPurposeMotors);
   const real idle[al::kMaxRotors] = {};
-  if (const Status st = al::motor_model_reset(s.motor_cfg, s.motors, rng, idle); st != Status::ok) return st;
+  if (const Status st = robots::multirotor_reset(m, s.state, nullptr, rng, idle); st != Status::ok) return st;
 
   RigidBodyParams bp;
-  bp.mass_kg = s.lee.mass_kg;
-  bp.inertia_b = s.lee.inertia_b;
-  bp.gravity_w = s.lee.gravity_w;
+  bp.mass_kg = m.ctrl.lee.mass_kg;
+  bp.inertia_b = m.ctrl.lee.inertia_b;
+  bp.gravity_w = m.ctrl.lee.gravity_w;
   bp.integrator = Integrator::rk4;
   if (const Status st = make_rigid_body_model(bp, p.body); st != Status::ok) return st;
   p.state = RigidBodyState();
@@ -38,15 +40,12 @@ Status flight_init(FlightStack& s, Plant& p) {
 }
 
 void control_step(FlightStack& s, const RigidBodyState& estimate, const real* command, real dt_s) {
-  const Wrench w = update_lee_position(s.lee, s.lee_state, estimate, command);
-  // Allocation and motor statuses are also latched in their fault flags, which fly() reports.
-  (void)al::allocate_sequential_desaturation(s.alloc_model, s.desat, s.alloc_state, w, s.alloc_out);
-  (void)al::motor_model_step(s.motor_cfg, s.motors, s.alloc_out.thrust_N, dt_s);
+  // Every stage's status is also latched in its fault flags, which fly() reports.
+  (void)robots::multirotor_step(s.model, s.state, estimate, command, 4, dt_s, s.out);
 }
 
 void plant_step(const FlightStack& s, Plant& p, real dt_s) {
-  const Vec6 w = al::wrench_from_thrusts(s.airframe.effectiveness, s.airframe.num_rotors, s.motors.thrust_N);
-  (void)step_rigid_body(p.body, p.state, Wrench::from_vec6(w), dt_s);
+  (void)step_rigid_body(p.body, p.state, robots::multirotor_wrench(s.model, s.state), dt_s);
   // Ground: a rigid floor at z = 0. Resting on it, the vehicle keeps its attitude and stops.
   if (p.state.position_w[2] < 0) {
     p.state.position_w[2] = 0;
@@ -95,7 +94,7 @@ Status fly(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock, WaitF
   for (int i = 0; i < c.num_waypoints; ++i) {
     r.hold_rms_error_m[i] = count[i] > 0 ? std::sqrt(sum_sq[i] / static_cast<real>(count[i])) : 0;
   }
-  r.faults = s.lee_state.faults.bits | s.alloc_state.faults.bits | s.motors.faults.bits;
+  r.faults = robots::multirotor_faults(s.state);
   return Status::ok;
 }
 

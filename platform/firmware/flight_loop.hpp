@@ -18,6 +18,7 @@
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/lee.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/robots/multirotor.hpp"
 #include "kestrel/kernel/status.hpp"
 
 namespace kestrel::firmware {
@@ -38,16 +39,11 @@ struct FlightConfig {
 };
 
 /// What lives on the flight controller: constant parameters and the state each stage owns.
+/// The chain is the core's (robots/multirotor.hpp), the same code the simulator steps.
 struct FlightStack {
-  LeeParams lee;
-  LeeState lee_state;
-  allocation::Airframe airframe;
-  allocation::AllocationModel alloc_model;
-  allocation::AllocatorState alloc_state;
-  allocation::SequentialDesaturationParams desat;
-  allocation::AllocationResult alloc_out;
-  allocation::MotorModelConfig motor_cfg;
-  allocation::MotorModelState motors;
+  robots::MultirotorModel model;  // Lee position gains, airframe, allocation model, motor constants
+  robots::MultirotorState state;  // controller, allocator and motor state
+  robots::MultirotorOutput out;   // the last controller wrench and thrust setpoints
 };
 
 /// The simulated vehicle the stack flies (closed on the target itself).

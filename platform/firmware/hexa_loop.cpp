@@ -52,24 +52,28 @@ Vec3 attitude_error(const Mat3& r_d, const Mat3& r) {
 }  // namespace
 
 Status hexa_init(const HexaConfig& c, HexaStack& s, HexaPlant& p) {
-  s.lee = hexa_lee_params();
-  if (const Status st = validate_lee_params(s.lee); st != Status::ok) return st;
-  lee_reset(s.lee, s.lee_state);
-  if (const Status st = al::make_airframe(al::kHexarotor, s.airframe); st != Status::ok) return st;
+  s.model.controller = ControllerKind::lee_rates;  // the rate loop; the outer loops call Lee position
+  s.model.ctrl.lee = hexa_lee_params();
+  if (const Status st = validate_lee_params(s.model.ctrl.lee); st != Status::ok) return st;
+  lee_reset(s.model.ctrl.lee, s.state.ctrl.lee);
+  if (const Status st = al::make_airframe(al::kHexarotor, s.model.airframe); st != Status::ok) return st;
   s.health = al::MotorHealth();
   // A flat hexarotor makes no lateral force: rank 4, reported as singular, expected.
-  const Status am = al::build_allocation_model(s.airframe, s.health, s.alloc_model);
+  const Status am = al::build_allocation_model(s.model.airframe, s.health, s.model.allocation);
   if (am != Status::ok && am != Status::singular) return am;
-  al::reset_allocator(s.alloc_state);
-  s.desat = al::SequentialDesaturationParams();
-  s.motor_cfg = al::kHexarotorMotors;
+  al::reset_allocator(s.state.allocator);
+  s.model.desat = al::SequentialDesaturationParams();
+  s.model.motors = al::kHexarotorMotors;
+  s.model.allocator = robots::AllocatorKind::sequential_desaturation;
+  s.model.use_motor_model = true;
+  if (const Status st = robots::finish_multirotor_model(s.model); st != Status::ok) return st;
   RngStream motor_rng(2, 0, kPurposeMotors);
   // Motors start at hover thrust (mg / 6 each): the vehicle is handed over in hover.
   real hover[al::kMaxRotors] = {};
   for (int i = 0; i < al::kHexarotor.num_rotors; ++i)
     hover[i] = al::kHexarotor.mass_kg * kStandardGravity / static_cast<real>(al::kHexarotor.num_rotors);
-  if (const Status st = al::motor_model_reset(s.motor_cfg, s.motors, motor_rng, hover); st != Status::ok) return st;
-  if (const Status st = al::schedule_motor_failure(s.motors, c.failed_motor, 0, c.failure_time_s); st != Status::ok)
+  if (const Status st = al::motor_model_reset(s.model.motors, s.state.motors, motor_rng, hover); st != Status::ok) return st;
+  if (const Status st = al::schedule_motor_failure(s.state.motors, c.failed_motor, 0, c.failure_time_s); st != Status::ok)
     return st;
 
   s.imu = se::imu_preset_bmi088();
@@ -89,9 +93,9 @@ Status hexa_init(const HexaConfig& c, HexaStack& s, HexaPlant& p) {
   s.rate_cmd_b = Vec3::Zero();
 
   RigidBodyParams bp;
-  bp.mass_kg = s.lee.mass_kg;
-  bp.inertia_b = s.lee.inertia_b;
-  bp.gravity_w = s.lee.gravity_w;
+  bp.mass_kg = s.model.ctrl.lee.mass_kg;
+  bp.inertia_b = s.model.ctrl.lee.inertia_b;
+  bp.gravity_w = s.model.ctrl.lee.gravity_w;
   bp.integrator = Integrator::rk4;
   if (const Status st = make_rigid_body_model(bp, p.body); st != Status::ok) return st;
   p.state = RigidBodyState();
@@ -112,10 +116,10 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
   r = HexaReport();
   const real dt = 1 / c.tick_hz;
   const int ticks = static_cast<int>(c.duration_s * c.tick_hz + 0.5_r);
-  const real k_ratio_x = s.lee_state.gains.k_rot[0] / s.lee_state.gains.k_angvel[0];
-  const real k_ratio_y = s.lee_state.gains.k_rot[1] / s.lee_state.gains.k_angvel[1];
-  const real k_ratio_z = s.lee_state.gains.k_rot[2] / s.lee_state.gains.k_angvel[2];
-  const real mg = s.lee.mass_kg * s.lee.gravity_w.norm();
+  const real k_ratio_x = s.state.ctrl.lee.gains.k_rot[0] / s.state.ctrl.lee.gains.k_angvel[0];
+  const real k_ratio_y = s.state.ctrl.lee.gains.k_rot[1] / s.state.ctrl.lee.gains.k_angvel[1];
+  const real k_ratio_z = s.state.ctrl.lee.gains.k_rot[2] / s.state.ctrl.lee.gains.k_angvel[2];
+  const real mg = s.model.ctrl.lee.mass_kg * s.model.ctrl.lee.gravity_w.norm();
   const Quat mount_nominal = Quat::Identity();
 
   real carrot_x = 0;
@@ -143,15 +147,15 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
     // ESC telemetry: a motor whose health dropped is reported on the next tick, and the allocator
     // is rebuilt without it (one pseudo-inverse, off the regular path).
     if (!failure_known) {
-      for (int i = 0; i < s.motors.num_motors; ++i) {
-        if (s.motors.health_scale[i] < s.health.thrust_scale[i]) {
-          s.health.thrust_scale[i] = s.motors.health_scale[i];
+      for (int i = 0; i < s.state.motors.num_motors; ++i) {
+        if (s.state.motors.health_scale[i] < s.health.thrust_scale[i]) {
+          s.health.thrust_scale[i] = s.state.motors.health_scale[i];
           failure_known = true;
         }
       }
       if (failure_known) {
         const std::uint64_t b0 = clock();
-        (void)al::build_allocation_model(s.airframe, s.health, s.alloc_model);  // singular: expected
+        (void)al::build_allocation_model(s.model.airframe, s.health, s.model.allocation);  // singular: expected
         r.rebuild_cost = clock() - b0;
         r.failure_detected_s = t;
       }
@@ -160,10 +164,10 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
     // 100 Hz position loop: collective thrust and desired attitude (Lee position, full cascade;
     // only its thrust and R_d are used, the torque is the inner loops' job).
     if (k % c.position_divider == 0) {
-      const Wrench w = update_lee_position(s.lee, s.lee_state, truth, command);
+      const Wrench w = update_lee_position(s.model.ctrl.lee, s.state.ctrl.lee, truth, command);
       s.collective_N = w.force_b[2];
-      s.desired_wb = quat_from_xyzw(s.lee_state.desired_quat_xyzw);
-      s.rate_ff_b = s.lee_state.desired_angvel_b;
+      s.desired_wb = quat_from_xyzw(s.state.ctrl.lee.desired_quat_xyzw);
+      s.rate_ff_b = s.state.ctrl.lee.desired_angvel_b;
     }
     // 500 Hz attitude loop: body-rate setpoint from the attitude error (see the header).
     if (k % c.attitude_divider == 0) {
@@ -205,21 +209,21 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
       ++r.imu_rejected;
     }
     const real rate_action[4] = {s.collective_N / mg - 1, s.rate_cmd_b[0], s.rate_cmd_b[1], s.rate_cmd_b[2]};
-    const Wrench w = update_lee_rates(s.lee, s.lee_state, est, rate_action);
-    (void)al::allocate_sequential_desaturation(s.alloc_model, s.desat, s.alloc_state, w, s.alloc_out);
-    for (int i = 0; i < s.airframe.num_rotors; ++i) {
-      s.motor_norm[i] = throttle_of(s.alloc_out.thrust_N[i], s.motor_cfg.thrust_max_N);
+    // The core chain on the rate command: Lee rates -> sequential desaturation -> motor model
+    // (statuses are latched as fault bits, which the report carries).
+    (void)robots::multirotor_control(s.model, ControllerKind::lee_rates, s.state, est, rate_action, 4, s.out.command);
+    (void)robots::multirotor_actuate(s.model, s.state, dt, s.out);
+    for (int i = 0; i < s.model.airframe.num_rotors; ++i) {
+      s.motor_norm[i] = throttle_of(s.out.allocation.thrust_N[i], s.model.motors.thrust_max_N);
       s.motor_pwm_us[i] = pwm_us_of(s.motor_norm[i]);
     }
-    (void)al::motor_model_step(s.motor_cfg, s.motors, s.alloc_out.thrust_N, dt);
     const std::uint64_t cost = clock() - t0;
     r.tick_cost_total += cost;
     if (cost > r.tick_cost_max) r.tick_cost_max = cost;
 
     // Plant (not part of the firmware's cost).
     prev_vel = p.state.linvel_w;
-    const Vec6 wrench = al::wrench_from_thrusts(s.airframe.effectiveness, s.airframe.num_rotors, s.motors.thrust_N);
-    (void)step_rigid_body(p.body, p.state, Wrench::from_vec6(wrench), dt);
+    (void)step_rigid_body(p.body, p.state, robots::multirotor_wrench(s.model, s.state), dt);
     if (p.state.position_w[2] < 0) {
       p.state.position_w[2] = 0;
       if (p.state.linvel_w[2] < 0) p.state.linvel_w = Vec3::Zero();
@@ -236,7 +240,7 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
       accel_z_sum += imu.accel_s[2];
     }
     if (t + dt <= c.failure_time_s) {
-      for (int i = 0; i < s.airframe.num_rotors; ++i) r.motor_norm_before[i] = s.motor_norm[i];
+      for (int i = 0; i < s.model.airframe.num_rotors; ++i) r.motor_norm_before[i] = s.motor_norm[i];
     } else {
       if (pos[2] < r.min_z_after_failure_m) r.min_z_after_failure_m = pos[2];
       if (!stopped) {
@@ -262,12 +266,12 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
   r.hold_rms_error_m = hold_n > 0 ? std::sqrt(hold_sq / static_cast<real>(hold_n)) : 0;
   r.mean_accel_z_hover = hover_n > 0 ? accel_z_sum / static_cast<real>(hover_n) : 0;
   r.final_yaw_error_rad = std::fabs(wrap_pi(euler_xyz(p.state.orientation_wb)[2]));
-  for (int i = 0; i < s.airframe.num_rotors; ++i) {
+  for (int i = 0; i < s.model.airframe.num_rotors; ++i) {
     r.motor_norm_after[i] = s.motor_norm[i];
     r.pwm_after_us[i] = s.motor_pwm_us[i];
   }
   r.stopped = stopped;
-  r.faults = s.lee_state.faults.bits | s.alloc_state.faults.bits | s.motors.faults.bits;
+  r.faults = robots::multirotor_faults(s.state);
   return Status::ok;
 }
 

@@ -35,6 +35,7 @@
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/lee.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/robots/multirotor.hpp"
 #include "kestrel/kernel/rng.hpp"
 #include "kestrel/kernel/status.hpp"
 #include "kestrel/sensors/imu.hpp"
@@ -65,15 +66,11 @@ inline constexpr HexaConfig kHexaConfig{};
 constexpr int kTofZones = 64;
 
 struct HexaStack {
-  LeeParams lee;
-  LeeState lee_state;
-  allocation::Airframe airframe;
-  allocation::AllocationModel alloc_model;
-  allocation::AllocatorState alloc_state;
-  allocation::SequentialDesaturationParams desat;
-  allocation::AllocationResult alloc_out;
-  allocation::MotorModelConfig motor_cfg;
-  allocation::MotorModelState motors;
+  // The core chain (robots/multirotor.hpp): Lee gains, airframe, allocation model (rebuilt after
+  // a motor failure), motor constants; controller, allocator and motor state; last outputs.
+  robots::MultirotorModel model;
+  robots::MultirotorState state;
+  robots::MultirotorOutput out;
   allocation::MotorHealth health;  // what the allocator was last told
   sensors::ImuParams imu;
   sensors::ImuState imu_state;

@@ -171,7 +171,7 @@ int run(int argc, char** argv) {
     }
     return run_scripted(*sim, label, steps, out_dir, quiet);
   }
-  if (cfg.robot.name == "ground_vehicle") {
+  if (cfg.robot.kind == robots::RobotKind::ground_vehicle) {
     std::fprintf(stderr, "kestrel: %s: simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar\n",
                  label.c_str());
     return 1;

@@ -58,6 +58,7 @@
 #include "kestrel/controllers/velocity_steering.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/thread_pool.hpp"
 
@@ -251,7 +252,7 @@ class PlanarSimulator final : public Simulator {
             e.lower_bound_max_m[i] < e.upper_bound_min_m[i]))
         return bad("env bounds: expected lower_bound_min <= lower_bound_max < upper_bound_min <= upper_bound_max on x and y");
 
-    ground_ = sc.vehicle == PlanarVehicle::ground_vehicle || (sc.vehicle == PlanarVehicle::automatic && c.robot.name == "ground_vehicle");
+    ground_ = sc.vehicle == PlanarVehicle::ground_vehicle || (sc.vehicle == PlanarVehicle::automatic && c.robot.kind == robots::RobotKind::ground_vehicle);
     ground_vehicle_ = ground_;
     int adim = 0;
     if (ground_) {
@@ -270,19 +271,14 @@ class PlanarSimulator final : public Simulator {
         return bad("controller " + c.controller.name +
                    " needs roll/pitch dynamics; the planar multirotor takes lee_position_control, lee_velocity_control, "
                    "lee_acceleration_control or lee_velocity_steering_angle_control; use simulator: rigid");
-      if (c.robot.name == "ground_vehicle") return bad("robot ground_vehicle with simulator.vehicle multirotor; pick a multirotor robot");
-      const al::AirframeSpec& spec = al::airframe_spec(c.robot.airframe);
-      if (al::make_airframe(spec, airframe_) != Status::ok) return bad("robot.airframe: invalid airframe");
-      const Status am = al::build_allocation_model(airframe_, alloc_model_);
-      if (am != Status::ok && am != Status::singular) return bad("robot.airframe: allocation model failed");
-      motor_cfg_ = al::motor_model_preset(c.robot.airframe);
-      ctrl_.lee = lee_params_base_quadrotor();
-      ctrl_.lee.mass_kg = c.robot.mass_kg;
-      ctrl_.lee.inertia_b = c.robot.inertia_diag_kg_m2.asDiagonal();
-      ctrl_.lee.gravity_w = Vec3(0, 0, -kStandardGravity);
-      ctrl_.lee.randomize_gains = c.controller.randomize_gains;
-      if (validate_lee_params(ctrl_.lee) != Status::ok) return bad("controller: invalid Lee parameters");
-      adim = static_cast<int>(controller_action_dim(k, ctrl_));
+      if (c.robot.kind == robots::RobotKind::ground_vehicle) return bad("robot ground_vehicle with simulator.vehicle multirotor; pick a multirotor robot");
+      // The same robot compile as the rigid World (URDF rotors, the ROV's gains, the allocator choice).
+      std::string robot_error;
+      if (!compile_multirotor(c, mr_, robot_error)) return bad(robot_error);
+      // The plane carries the vehicle's weight at standard gravity (the altitude is held), so the
+      // controller's feed-forward uses it whatever sim.gravity_w says.
+      mr_.ctrl.lee.gravity_w = Vec3(0, 0, -kStandardGravity);
+      adim = static_cast<int>(controller_action_dim(k, mr_.ctrl));
       controller_ = c.controller.name;
     }
     // Robot footprint.
@@ -302,9 +298,7 @@ class PlanarSimulator final : public Simulator {
     plane_z_ = ground_ ? 0_r : sc.altitude_m;
     const std::size_t nr = static_cast<std::size_t>(num_robots());
     steer_.assign(nr, VelocitySteeringState());
-    lee_.assign(nr, ControllerState());
-    alloc_.assign(nr, al::AllocatorState());
-    motors_.assign(nr, al::MotorModelState());
+    mr_state_.assign(nr, robots::MultirotorState());
     force_xy_.assign(2 * nr, 0);
     normal_sum_.assign(nr, 0);
     prev_omega_.assign(nr, 0);
@@ -462,7 +456,7 @@ class PlanarSimulator final : public Simulator {
         bytes(&w, sizeof(w));
         const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
         if (ground_) bytes(&steer_[i].steering_rad, sizeof(real));
-        else bytes(motors_[i].thrust_N, sizeof(real) * static_cast<std::size_t>(airframe_.num_rotors));
+        else bytes(mr_state_[i].motors.thrust_N, sizeof(real) * static_cast<std::size_t>(mr_.airframe.num_rotors));
         bytes(&crashed_[i], 1);
         if (lidar_beams_ > 0) bytes(&lidar_[i * static_cast<std::size_t>(lidar_beams_)], sizeof(real) * static_cast<std::size_t>(lidar_beams_));
       }
@@ -681,20 +675,20 @@ class PlanarSimulator final : public Simulator {
       velocity_steering_reset(steer_[i], gain_scale_[i]);
       return;
     }
-    controller_reset(cfg_.controller.kind, ctrl_, lee_[i], rng);
-    LeeGains& g = lee_[i].lee.gains;
+    real hover[al::kMaxRotors] = {};
+    const real per_motor = mass(i) * kStandardGravity / static_cast<real>(mr_.airframe.num_rotors);
+    for (int m = 0; m < mr_.airframe.num_rotors; ++m) hover[m] = per_motor;
+    robots::MultirotorState& mr = mr_state_[i];
+    (void)robots::multirotor_reset(mr_, mr, &rng, rng, hover);  // valid model and hover: cannot fail
+    // Domain randomisation over the drawn state: controller gains and motor time constants.
+    LeeGains& g = mr.ctrl.lee.gains;
     g.k_pos *= gain_scale_[i];
     g.k_vel *= gain_scale_[i];
     g.k_rot *= gain_scale_[i];
     g.k_angvel *= gain_scale_[i];
-    al::reset_allocator(alloc_[i]);
-    real hover[al::kMaxRotors] = {};
-    const real per_motor = mass(i) * kStandardGravity / static_cast<real>(airframe_.num_rotors);
-    for (int m = 0; m < airframe_.num_rotors; ++m) hover[m] = per_motor;
-    (void)al::motor_model_reset(motor_cfg_, motors_[i], rng, hover);
-    for (int m = 0; m < airframe_.num_rotors; ++m) {
-      motors_[i].time_constant_increasing_s[m] *= motor_scale_[i];
-      motors_[i].time_constant_decreasing_s[m] *= motor_scale_[i];
+    for (int m = 0; m < mr_.airframe.num_rotors; ++m) {
+      mr.motors.time_constant_increasing_s[m] *= motor_scale_[i];
+      mr.motors.time_constant_decreasing_s[m] *= motor_scale_[i];
     }
   }
 
@@ -848,18 +842,20 @@ class PlanarSimulator final : public Simulator {
     st.angvel_b = Vec3(0, 0, static_cast<real>(b->GetAngularVelocity()));
     real action[kMaxActionDim] = {};
     for (int k = 0; k < action_dim_; ++k) action[k] = actions_[i * static_cast<std::size_t>(action_dim_) + static_cast<std::size_t>(k)];
-    ControllerOutput out;
-    (void)update_controller(cfg_.controller.kind, ctrl_, lee_[i], st, action, kMaxActionDim, out);
+    // The core chain with the controller's wrench reduced to the plane: collective thrust |f_des|
+    // and the yaw torque (roll and pitch are not simulated). Statuses are latched as fault bits.
+    robots::MultirotorState& mr = mr_state_[i];
+    robots::MultirotorOutput out;
+    (void)robots::multirotor_control(mr_, mr_.controller, mr, st, action, kMaxActionDim, out.command);
     const real m = mass(i);
-    const Vec3 a_cmd = lee_[i].lee.accel_command_w;
-    const Vec3 f_des = m * (a_cmd - ctrl_.lee.gravity_w);
-    Wrench cmd;
-    cmd.force_b = Vec3(0, 0, f_des.norm());
-    cmd.torque_b = Vec3(0, 0, out.wrench_b.torque_b[2]);
-    al::AllocationResult alloc;
-    (void)al::allocate_sequential_desaturation(alloc_model_, desat_, alloc_[i], cmd, alloc);
-    (void)al::motor_model_step(motor_cfg_, motors_[i], alloc.thrust_N, dt);
-    const Vec6 w = al::wrench_from_thrusts(airframe_.effectiveness, airframe_.num_rotors, motors_[i].thrust_N);
+    const Vec3 a_cmd = mr.ctrl.lee.accel_command_w;
+    const Vec3 f_des = m * (a_cmd - mr_.ctrl.lee.gravity_w);
+    const real yaw_torque = out.command.wrench_b.torque_b[2];
+    out.command.is_wrench = true;
+    out.command.wrench_b.force_b = Vec3(0, 0, f_des.norm());
+    out.command.wrench_b.torque_b = Vec3(0, 0, yaw_torque);
+    (void)robots::multirotor_actuate(mr_, mr, dt, out);
+    const Vec6 w = robots::multirotor_wrench(mr_, mr).as_vec6();
     const real thrust = w[2], weight = m * kStandardGravity;
     const real h_avail = thrust > weight ? std::sqrt(thrust * thrust - weight * weight) : 0_r;
     real fx = m * a_cmd[0], fy = m * a_cmd[1];
@@ -983,16 +979,10 @@ class PlanarSimulator final : public Simulator {
   bool auto_reset_ = true;
   std::string controller_;
   VelocitySteeringParams vs_;
-  ControllerParams ctrl_;
-  al::Airframe airframe_;
-  al::AllocationModel alloc_model_;
-  al::SequentialDesaturationParams desat_;
-  al::MotorModelConfig motor_cfg_;
+  robots::MultirotorModel mr_;  // the multirotor's chain (robots/multirotor.hpp), compiled as on rigid
   real half_x_ = 0, half_y_ = 0, radius_ = 0, bound_r_ = 0, plane_z_ = 0;
   std::vector<VelocitySteeringState> steer_;
-  std::vector<ControllerState> lee_;
-  std::vector<al::AllocatorState> alloc_;
-  std::vector<al::MotorModelState> motors_;
+  std::vector<robots::MultirotorState> mr_state_;
   std::vector<real> force_xy_, normal_sum_, prev_omega_;
   std::vector<real> kin_;  // (robots x 5) ground vehicle: speed set, COM velocity set (x, y), heading (cos, sin)
   std::unique_ptr<unsigned char[]> arena_storage_;  // declared before envs_: destroyed after the worlds

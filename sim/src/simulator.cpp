@@ -212,6 +212,7 @@ void register_simulators(Registries& r) {
   r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
     RobotConfig c;
     c.name = "ground_vehicle";
+    c.kind = robots::RobotKind::ground_vehicle;
     c.mass_kg = 3.5_r;
     c.inertia_diag_kg_m2 = Vec3(0.03_r, 0.08_r, 0.1_r);
     c.shape.type = ShapeType::box;

@@ -19,7 +19,7 @@ class RigidSimulator final : public Simulator {
   RigidSimulator() : Simulator(Backend::rigid) {}
 
   bool init(const WorldConfig& config, std::string& error) {
-    if (config.robot.name == "ground_vehicle") {
+    if (config.robot.kind == robots::RobotKind::ground_vehicle) {
       error = "simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar";
       return false;
     }

@@ -9,6 +9,7 @@
 // The contact response is explicit (forces from the post-integration penetration act during the
 // next step), the usual choice for penalty methods with a small dt.
 #include "kestrel/sim/world.hpp"
+#include "kestrel/sim/robot_model.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -91,28 +92,6 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   w->robots_per_env_ = config.robot.robots_per_env;
 
   // Robot models (validated by the core's own checks).
-  al::AirframeSpec spec = al::airframe_spec(config.robot.airframe);
-  const std::size_t n_urdf_rotors = config.robot.rotors.size();
-  if (n_urdf_rotors > 0) {
-    // Rotor geometry from a URDF (sim/urdf.hpp) over the preset's limits and motor constants.
-    if (n_urdf_rotors > static_cast<std::size_t>(al::kMaxRotors) || config.robot.rotor_directions.size() != n_urdf_rotors)
-      return fail("robot.rotors: expected 1.." + std::to_string(al::kMaxRotors) + " rotors, each with a direction");
-    spec.num_rotors = static_cast<int>(n_urdf_rotors);
-    spec.source = al::AirframeSource::rotor_geometry;
-    for (std::size_t m = 0; m < n_urdf_rotors; ++m) {
-      spec.rotors[m] = config.robot.rotors[m];
-      spec.direction[m] = config.robot.rotor_directions[m];
-    }
-  }
-  if (al::make_airframe(spec, w->airframe_) != Status::ok) return fail("robot.airframe: invalid airframe");
-  const Status am = al::build_allocation_model(w->airframe_, w->alloc_model_);
-  if (am != Status::ok && am != Status::singular) return fail("robot.airframe: allocation model failed");  // quads: rank 4
-  w->motor_cfg_ = al::motor_model_preset(config.robot.airframe);
-  if (n_urdf_rotors > 0) {
-    w->motor_cfg_.num_motors = spec.num_rotors;
-    for (int m = 0; m < al::kMaxRotors; ++m) w->motor_cfg_.direction[m] = m < spec.num_rotors ? spec.direction[m] : 0;
-  }
-  if (al::validate(w->motor_cfg_) != Status::ok) return fail("robot.motor_model: invalid motor model");
   RigidBodyParams bp;
   bp.mass_kg = config.robot.mass_kg;
   bp.inertia_b = config.robot.inertia_diag_kg_m2.asDiagonal();
@@ -124,18 +103,11 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   bp.integrator = config.sim.integrator;
   if (make_rigid_body_model(bp, w->body_model_) != Status::ok)
     return fail("robot: mass_kg must be positive and inertia_diag_kg_m2 positive definite");
-  w->ctrl_params_.lee = config.robot.airframe == al::AirframePreset::base_rov ? lee_params_rov() : lee_params_base_quadrotor();
-  w->ctrl_params_.lee.mass_kg = config.robot.mass_kg;
-  w->ctrl_params_.lee.inertia_b = bp.inertia_b;
-  w->ctrl_params_.lee.gravity_w = config.sim.gravity_w;
-  w->ctrl_params_.lee.randomize_gains = config.controller.randomize_gains;
-  if (validate_lee_params(w->ctrl_params_.lee) != Status::ok) return fail("controller: invalid Lee parameters");
-  w->ctrl_params_.motors.num_motors = static_cast<std::size_t>(w->airframe_.num_rotors);
-  for (int m = 0; m < w->airframe_.num_rotors; ++m) {
-    w->ctrl_params_.motors.min_thrust_N[m] = w->airframe_.thrust_min_N[m];
-    w->ctrl_params_.motors.max_thrust_N[m] = w->airframe_.thrust_max_N[m];
+  {
+    std::string robot_error;
+    if (!compile_multirotor(config, w->mr_, robot_error)) return fail(robot_error);
   }
-  w->action_dim_ = controller_action_dim(config.controller.kind, w->ctrl_params_);
+  w->action_dim_ = controller_action_dim(config.controller.kind, w->mr_.ctrl);
   {
     const ShapeSpec& sh = config.robot.shape;
     switch (sh.type) {
@@ -187,9 +159,7 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   const std::size_t nr = static_cast<std::size_t>(w->num_envs_) * w->robots_per_env_;
   const std::size_t ne = static_cast<std::size_t>(w->num_envs_);
   w->state_.assign(nr, RigidBodyState());
-  w->ctrl_state_.assign(nr, ControllerState());
-  w->alloc_state_.assign(nr, al::AllocatorState());
-  w->motors_.assign(nr, al::MotorModelState());
+  w->mr_state_.assign(nr, robots::MultirotorState());
   w->actions_.assign(nr * kMaxActionDim, 0);
   w->applied_actions_.assign(nr * kMaxActionDim, 0);
   w->target_w_.assign(nr, Vec3::Zero());
@@ -198,6 +168,7 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
   w->contact_torque_b_.assign(nr, Vec3::Zero());
   w->crashed_.assign(nr, 0);
   w->rng_reset_.resize(ne);
+  w->status_count_.assign(ne, 0);
   w->rng_step_.resize(ne);
   for (std::size_t i = 0; i < ne; ++i) {
     w->rng_reset_[i] = RngStream(config.seed, static_cast<std::uint32_t>(i), kPurposeReset);
@@ -455,12 +426,11 @@ void World::reset_env(int env) {
     const real yaw = rng.uniform(-cfg_.robot.max_init_yaw_rad, cfg_.robot.max_init_yaw_rad);
     st.orientation_wb = quat_from_euler_xyz(0, 0, yaw);
     state_[i] = st;
-    controller_reset(cfg_.controller.kind, ctrl_params_, ctrl_state_[i], rng);
-    al::reset_allocator(alloc_state_[i]);
     real hover[al::kMaxRotors] = {};
-    const real per_motor = body_model_.params.mass_kg * kStandardGravity / static_cast<real>(airframe_.num_rotors);
-    for (int m = 0; m < airframe_.num_rotors; ++m) hover[m] = per_motor;
-    (void)al::motor_model_reset(motor_cfg_, motors_[i], rng, hover);
+    const real per_motor = body_model_.params.mass_kg * kStandardGravity / static_cast<real>(mr_.airframe.num_rotors);
+    for (int m = 0; m < mr_.airframe.num_rotors; ++m) hover[m] = per_motor;
+    // One stream for the gain and the motor draws, in that order (the World's order since the start).
+    count_status(env, robots::multirotor_reset(mr_, mr_state_[i], &rng, rng, hover));
     // Task: the position setpoint (or the start point for hover) is the action of the episode.
     target_w_[i] = (hover_task || fallback) ? st.position_w : targets[chosen];
     real* a = &actions_[i * kMaxActionDim];
@@ -473,7 +443,7 @@ void World::reset_env(int env) {
       a[2] = setpoint_w_[i][2];
       a[3] = 0;
     } else if (cfg_.controller.kind == ControllerKind::direct_motor) {
-      for (int m = 0; m < airframe_.num_rotors; ++m) a[m] = per_motor;
+      for (int m = 0; m < mr_.airframe.num_rotors; ++m) a[m] = per_motor;
     }
     std::copy(a, a + kMaxActionDim, &applied_actions_[i * kMaxActionDim]);
     contact_force_w_[i] = Vec3::Zero();
@@ -538,20 +508,11 @@ void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_actio
     for (int k = 0; k < 3; ++k) noisy.linvel_w[k] += cfg_.env.observation_noise_velocity_m_s * rng.normal();
     observed = &noisy;
   }
-  ControllerOutput out;
-  (void)update_controller(cfg_.controller.kind, ctrl_params_, ctrl_state_[i], *observed, applied, kMaxActionDim, out);
-  const real* reference = out.motor_thrust_N;
-  al::AllocationResult alloc;
-  if (out.is_wrench) {
-    if (cfg_.robot.use_desaturation) {
-      (void)al::allocate_sequential_desaturation(alloc_model_, desat_, alloc_state_[i], out.wrench_b, alloc);
-    } else {
-      (void)al::allocate_pinv(alloc_model_, alloc_state_[i], out.wrench_b, alloc);
-    }
-    reference = alloc.thrust_N;
-  }
-  (void)al::motor_model_step(motor_cfg_, motors_[i], reference, dt);
-  Wrench w = Wrench::from_vec6(al::wrench_from_thrusts(airframe_.effectiveness, airframe_.num_rotors, motors_[i].thrust_N));
+  robots::MultirotorOutput out;
+  // Every non-ok status of the chain is also latched as fault bits in mr_state_[i] (the batched
+  // twin reproduces them bit for bit), which summary() reports; the status itself adds nothing.
+  (void)robots::multirotor_step(mr_, mr_state_[i], *observed, applied, kMaxActionDim, dt, out);
+  Wrench w = robots::multirotor_wrench(mr_, mr_state_[i]);
   Vec3 extra_force_w = contact_force_w_[i];
   w.torque_b += contact_torque_b_[i];
   if (cfg_.env.enable_disturbance) {
@@ -566,7 +527,7 @@ void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_actio
     }
   }
   const real h = dt / static_cast<real>(cfg_.sim.substeps);
-  for (int s = 0; s < cfg_.sim.substeps; ++s) (void)step_rigid_body(body_model_, st, w, h, extra_force_w);
+  for (int s = 0; s < cfg_.sim.substeps; ++s) (void)step_rigid_body(body_model_, st, w, h, extra_force_w);  // non-finite input is held (latched in st)
 }
 
 void World::move_obstacles(int env) {
@@ -789,8 +750,11 @@ WorldSummary World::summary() const {
     add_env_counters(s, e);
     err += e.tracking_error_sum_m;
     end_dist += e.final_distance_sum_m;
-    for (int r = 0; r < robots_per_env_; ++r)
+    for (int r = 0; r < robots_per_env_; ++r) {
       final_dist += static_cast<double>((target_w_[index(env, r)] - state_[index(env, r)].position_w).norm());
+      s.fault_bits |= robots::multirotor_faults(mr_state_[index(env, r)]);
+    }
+    s.reset_errors += status_count_[static_cast<std::size_t>(env)];
   }
   const double nr = static_cast<double>(num_envs_) * robots_per_env_;
   s.mean_tracking_error_m = s.env_steps > 0 ? err / (static_cast<double>(s.env_steps) * robots_per_env_) : 0;
@@ -825,7 +789,7 @@ std::uint64_t World::state_hash() const {
       f.bytes(s.orientation_wb.coeffs().data(), sizeof(real) * 4);
       f.v3(s.linvel_w);
       f.v3(s.angvel_b);
-      f.bytes(motors_[i].thrust_N, sizeof(real) * static_cast<std::size_t>(airframe_.num_rotors));
+      f.bytes(mr_state_[i].motors.thrust_N, sizeof(real) * static_cast<std::size_t>(mr_.airframe.num_rotors));
       f.pod(crashed_[i]);
     }
     for (int k = 0; k < num_obstacles_[env]; ++k) f.v3(obstacle(env, k).shape.position_w);

@@ -13,21 +13,6 @@
 namespace kestrel::sim {
 
 namespace {
-batch::Models models_of(const WorldConfig& cfg, const ControllerParams& ctrl, const allocation::AllocationModel& alloc,
-                        const allocation::SequentialDesaturationParams& desat, const allocation::MotorModelConfig& motor,
-                        const allocation::Airframe& airframe, const RigidBodyModel& body) {
-  batch::Models m;
-  m.controller = cfg.controller.kind;
-  m.ctrl = &ctrl;
-  m.alloc = &alloc;
-  m.desat = &desat;
-  m.motor = &motor;
-  m.airframe = &airframe;
-  m.body = &body;
-  m.dt_s = cfg.sim.dt_s;
-  m.substeps = cfg.sim.substeps;
-  return m;
-}
 // Software prefetch of one robot's per-step storage: at 4096+ environments a worker's robots no
 // longer fit in L2, and the motor state alone (448 bytes, six of its seven lines touched per step)
 // would otherwise miss on first touch. No effect on results.
@@ -44,8 +29,7 @@ bool World::batch_eligible() const {
   // disturbance draw from the environment's stream inside the robot step, which the twin leaves
   // to the scalar path.
   return robots_per_env_ == 1 && !cfg_.env.perturb_observations && !cfg_.env.enable_disturbance &&
-         cfg_.robot.use_desaturation &&
-         batch::eligible(models_of(cfg_, ctrl_params_, alloc_model_, desat_, motor_cfg_, airframe_, body_model_));
+         batch::chain_eligible(mr_) && batch::eligible(batch::models_of(mr_, body_model_, cfg_.sim.dt_s, cfg_.sim.substeps));
 }
 
 bool World::set_batched(bool on) {
@@ -60,9 +44,9 @@ void World::robot_dynamics_batch(int env0, unsigned new_action_mask, const batch
     real* applied = &applied_actions_[i * kMaxActionDim];
     if ((new_action_mask >> l) & 1u) std::memcpy(applied, &actions_[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
     lanes[l].state = &state_[i];
-    lanes[l].ctrl = &ctrl_state_[i];
-    lanes[l].alloc = &alloc_state_[i];
-    lanes[l].motors = &motors_[i];
+    lanes[l].ctrl = &mr_state_[i].ctrl;
+    lanes[l].alloc = &mr_state_[i].allocator;
+    lanes[l].motors = &mr_state_[i].motors;
     lanes[l].action = applied;
     lanes[l].contact_force_w = &contact_force_w_[i];
     lanes[l].contact_torque_b = &contact_torque_b_[i];
@@ -73,14 +57,14 @@ void World::robot_dynamics_batch(int env0, unsigned new_action_mask, const batch
 int World::env_steps_batched(int begin, int end) {
   constexpr int kL = batch::kLanes;
   constexpr int kAhead = 2 * kL;  // prefetch distance: two groups (~a microsecond of work)
-  const batch::Models m = models_of(cfg_, ctrl_params_, alloc_model_, desat_, motor_cfg_, airframe_, body_model_);
+  const batch::Models m = batch::models_of(mr_, body_model_, cfg_.sim.dt_s, cfg_.sim.substeps);
   int env = begin;
   for (; env + kL <= end; env += kL) {
     for (int l = 0; l < kL && env + kAhead + l < end; ++l) {
       const std::size_t i = index(env + kAhead + l, 0);
-      prefetch(&motors_[i]);
-      prefetch(&ctrl_state_[i].lee);
-      prefetch(&alloc_state_[i]);
+      prefetch(&mr_state_[i].motors);
+      prefetch(&mr_state_[i].ctrl.lee);
+      prefetch(&mr_state_[i].allocator);
       prefetch(&state_[i]);
     }
     // Lockstep needs the same number of physics steps in every lane (always, unless

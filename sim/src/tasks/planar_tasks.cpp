@@ -534,7 +534,7 @@ std::unique_ptr<Simulator> planar_task_simulator(const WorldConfig& config, cons
     return nullptr;
   }
   const bool ground = config.simulator.vehicle == PlanarVehicle::ground_vehicle ||
-                      (config.simulator.vehicle == PlanarVehicle::automatic && config.robot.name == "ground_vehicle");
+                      (config.simulator.vehicle == PlanarVehicle::automatic && config.robot.kind == robots::RobotKind::ground_vehicle);
   if (ground) {
     error = pre + "flies the fixed-altitude multirotor; the ground vehicle's actions are [speed, steering] (use a "
                   "multirotor robot, e.g. base_quadrotor, or simulator: rigid)";

@@ -29,6 +29,7 @@
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/robots/multirotor.hpp"
 
 namespace kestrel::sim::batch {
 
@@ -48,6 +49,27 @@ struct Models {
   real dt_s = 0;
   int substeps = 1;
 };
+
+/// The twin's view of the core chain's model (robots/multirotor.hpp) and the body model.
+inline Models models_of(const robots::MultirotorModel& robot, const RigidBodyModel& body, real dt_s, int substeps) {
+  Models m;
+  m.controller = robot.controller;
+  m.ctrl = &robot.ctrl;
+  m.alloc = &robot.allocation;
+  m.desat = &robot.desat;
+  m.motor = &robot.motors;
+  m.airframe = &robot.airframe;
+  m.body = &body;
+  m.dt_s = dt_s;
+  m.substeps = substeps;
+  return m;
+}
+
+/// Whether the twin can step this chain: the multirotor model must use the motor model and the
+/// sequential desaturation (the rest is checked by eligible()).
+inline bool chain_eligible(const robots::MultirotorModel& robot) {
+  return robot.use_motor_model && robot.allocator == robots::AllocatorKind::sequential_desaturation;
+}
 
 /// One lane's robot: pointers into the owner's storage (read and written in place).
 struct Lane {

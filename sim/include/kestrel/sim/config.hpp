@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/robots/multirotor.hpp"
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
@@ -146,6 +147,8 @@ struct SensorConfig {
 /// Robot config: dynamics, airframe, motors, controller, collision shape.
 struct RobotConfig {
   std::string name = "base_quadrotor";
+  // What chain drives it (set by the robot preset; a type, never a name compare).
+  robots::RobotKind kind = robots::RobotKind::multirotor;
   int robots_per_env = 1;
   allocation::AirframePreset airframe = allocation::AirframePreset::base_quadrotor;
   real mass_kg = 0.25_r;

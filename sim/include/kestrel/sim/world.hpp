@@ -25,6 +25,7 @@
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
 #include "kestrel/kernel/rng.hpp"
+#include "kestrel/robots/multirotor.hpp"
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/config.hpp"
 #include "kestrel/sim/thread_pool.hpp"
@@ -74,6 +75,8 @@ struct WorldSummary {
   double mean_tracking_error_m = 0;
   double final_mean_distance_m = 0;  // mean distance to target over robots at the end of the run
   double episode_end_distance_m = 0; // mean distance to target when an episode ends (any reason)
+  std::uint32_t fault_bits = 0;      // OR of every robot's latched chain faults (kernel/status.hpp)
+  std::uint64_t reset_errors = 0;    // non-ok statuses from the core while resetting robots
 };
 
 /// Adds one environment's event counters to a summary's totals (both backends summarise this way;
@@ -206,11 +209,16 @@ class World {
     crashed_[index(env, robot)] = 0;
   }
   const Vec3& contact_torque_b(int env, int robot) const { return contact_torque_b_[index(env, robot)]; }
-  const ControllerState& controller_state(int env, int robot) const { return ctrl_state_[index(env, robot)]; }
-  const allocation::MotorModelState& motor_state(int env, int robot) const { return motors_[index(env, robot)]; }
-  const allocation::Airframe& airframe() const { return airframe_; }
-  const allocation::MotorModelConfig& motor_config() const { return motor_cfg_; }
-  const ControllerParams& controller_params() const { return ctrl_params_; }
+  const ControllerState& controller_state(int env, int robot) const { return mr_state_[index(env, robot)].ctrl; }
+  const allocation::MotorModelState& motor_state(int env, int robot) const { return mr_state_[index(env, robot)].motors; }
+  const allocation::Airframe& airframe() const { return mr_.airframe; }
+  const allocation::MotorModelConfig& motor_config() const { return mr_.motors; }
+  const ControllerParams& controller_params() const { return mr_.ctrl; }
+  /// The robots' control chain (robots/multirotor.hpp), compiled once for the world.
+  const robots::MultirotorModel& robot_model() const { return mr_; }
+  /// Non-ok statuses returned by the core while resetting this environment's robots, summed since
+  /// set-up (reported in the summary; statuses inside a step are latched as fault bits instead).
+  std::uint64_t reset_status_count(int env) const { return status_count_[static_cast<std::size_t>(env)]; }
 
  private:
   World() = default;
@@ -264,17 +272,11 @@ class World {
 
   // Constant per-world models (robots are identical within a world).
   RigidBodyModel body_model_;
-  ControllerParams ctrl_params_;
-  allocation::Airframe airframe_;
-  allocation::AllocationModel alloc_model_;
-  allocation::SequentialDesaturationParams desat_;
-  allocation::MotorModelConfig motor_cfg_;
+  robots::MultirotorModel mr_;  // controller -> allocation -> motors (robots/multirotor.hpp)
 
   // Per robot (num_envs * robots_per_env).
   std::vector<RigidBodyState> state_;
-  std::vector<ControllerState> ctrl_state_;
-  std::vector<allocation::AllocatorState> alloc_state_;
-  std::vector<allocation::MotorModelState> motors_;
+  std::vector<robots::MultirotorState> mr_state_;  // controller, allocator and motor state
   std::vector<real> actions_;          // (robots x kMaxActionDim): latest action
   std::vector<real> applied_actions_;  // (robots x kMaxActionDim): what the controller uses now
   std::vector<Vec3> target_w_;
@@ -284,6 +286,10 @@ class World {
   std::vector<std::uint8_t> crashed_;
 
   // Per environment.
+  std::vector<std::uint64_t> status_count_;  // non-ok core statuses (step_status_count)
+  void count_status(int env, Status st) {
+    if (st != Status::ok) ++status_count_[static_cast<std::size_t>(env)];
+  }
   std::vector<RngStream> rng_reset_, rng_step_;  // placement/reset draws; per-step noise/disturbance
   std::vector<Vec3> lower_w_, upper_w_;
   std::vector<int> phys_steps_, latency_, episode_step_, num_obstacles_, episodes_since_layout_;
