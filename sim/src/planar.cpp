@@ -58,6 +58,7 @@
 #include "kestrel/controllers/velocity_steering.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/thread_pool.hpp"
@@ -895,7 +896,8 @@ class PlanarSimulator final : public Simulator {
       any_crash = any_crash || crashed_[i] != 0;
       const b2Vec2 p = ev.robots[static_cast<std::size_t>(r)]->GetPosition();
       const real px = static_cast<real>(p.x), py = static_cast<real>(p.y);
-      out = out || !(px >= ev.lower[0] - 0.5_r && px <= ev.upper[0] + 0.5_r && py >= ev.lower[1] - 0.5_r && py <= ev.upper[1] + 0.5_r);
+      const real p_w[2] = {px, py};
+      out = out || out_of_bounds(p_w, ev.lower.data(), ev.upper.data(), 2);
       err += distance_to_target(ei, r);
     }
     es.tracking_error_sum_m += static_cast<double>(err);

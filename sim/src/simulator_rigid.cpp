@@ -6,6 +6,7 @@
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/simulator.hpp"
 
 namespace kestrel::sim {
@@ -135,8 +136,7 @@ class RigidSimulator final : public Simulator {
     world_->lower_upper_bounds(e, lo, hi);
     for (int r = 0; r < robots_per_env_; ++r) {
       const Vec3& p = world_->robot_state(e, r).position_w;
-      for (int k = 0; k < 3; ++k)
-        if (!(p[k] >= lo[k] - 0.5_r && p[k] <= hi[k] + 0.5_r)) return true;
+      if (out_of_bounds(p, lo, hi)) return true;
       if (cfg_.env.reset_on_collision && world_->crashed(e, r)) return true;
     }
     return false;

@@ -1,4 +1,5 @@
 // Task base and position_setpoint_task (see task.hpp for the API and the reference it follows).
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/task.hpp"
 
 #include <algorithm>
@@ -166,8 +167,7 @@ class PositionSetpointTask final : public Task {
       const RigidBodyState& st = world_->robot_state(env, 0);
       Vec3 lo, hi;
       world_->lower_upper_bounds(env, lo, hi);
-      bool out = false;  // the World's out-of-bounds rule (0.5 m margin, see World::env_step)
-      for (int k = 0; k < 3; ++k) out = out || !(st.position_w[k] >= lo[k] - 0.5_r && st.position_w[k] <= hi[k] + 0.5_r);
+      const bool out = out_of_bounds(st.position_w, lo, hi);
       std::uint8_t crash = (world_->crashed(env, 0) || out) ? 1 : 0;
       float q[4], e_w[3], e_v[3], w[3];
       state_inputs(env, q, e_w, w);

@@ -8,6 +8,7 @@
 //   and the other robots -> penalty contact wrench for the next step, crash flag.
 // The contact response is explicit (forces from the post-integration penetration act during the
 // next step), the usual choice for penalty methods with a small dt.
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/world.hpp"
 #include "kestrel/sim/robot_model.hpp"
 
@@ -689,7 +690,7 @@ void World::env_step_end(int env) {
     any_crash = any_crash || crashed_[i] != 0;
     const Vec3& p = state_[i].position_w;
     // Out of bounds (with a margin for a robot resting on the ground plane) ends the episode.
-    for (int k = 0; k < 3; ++k) out = out || !(p[k] >= lower_w_[env][k] - 0.5_r && p[k] <= upper_w_[env][k] + 0.5_r);
+    out = out || out_of_bounds(p, lower_w_[env], upper_w_[env]);
     err_sum += (setpoint_w_[i] - p).norm();  // the controller's tracking error (setpoint = target unless it moves)
   }
   es.tracking_error_sum_m += static_cast<double>(err_sum);

@@ -45,6 +45,7 @@
 #include <limits>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -80,9 +81,7 @@ class PlanarTaskBase : public Task {
     Vec3 lo, hi;
     sim_->env_bounds(env, lo, hi);
     const real* p = sim_->base_pos_w() + 3 * env;
-    bool out = false;
-    for (int k = 0; k < 2; ++k) out = out || !(p[k] >= lo[k] - 0.5_r && p[k] <= hi[k] + 0.5_r);
-    return out;
+    return out_of_bounds(p, lo.data(), hi.data(), 2);
   }
 
   void quat(int env, float q[4]) const {

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/world.hpp"
 
 namespace kestrel::sim::task_access {
@@ -41,9 +42,7 @@ inline bool out_of_bounds(const World& w, int env) {
   Vec3 lo, hi;
   w.lower_upper_bounds(env, lo, hi);
   const Vec3& p = w.robot_state(env, 0).position_w;
-  bool out = false;
-  for (int k = 0; k < 3; ++k) out = out || !(p[k] >= lo[k] - 0.5_r && p[k] <= hi[k] + 0.5_r);
-  return out;
+  return sim::out_of_bounds(p, lo, hi);
 }
 
 inline void bounds(const World& w, int env, Vec3& lower_w, Vec3& upper_w) { w.lower_upper_bounds(env, lower_w, upper_w); }
