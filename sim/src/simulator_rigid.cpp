@@ -7,6 +7,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
+#include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/simulator.hpp"
 
 namespace kestrel::sim {
@@ -50,7 +51,7 @@ class RigidSimulator final : public Simulator {
 
   int num_threads() const override { return world_->num_threads(); }
   const char* controller_name() const override { return cfg_.controller.name.c_str(); }
-  World* world() override { return world_.get(); }
+  World* world() { return world_.get(); }
 
   void post_physics_step() override {
     for (int e = 0; e < num_envs_; ++e) {
@@ -225,5 +226,10 @@ std::unique_ptr<Simulator> make_rigid_simulator(const WorldConfig& config, std::
   if (!s->init(config, error)) return nullptr;
   return s;
 }
+
+World* rigid_world(Simulator& sim) {
+  return sim.backend() == Backend::rigid ? static_cast<RigidSimulator&>(sim).world() : nullptr;
+}
+const World* rigid_world(const Simulator& sim) { return rigid_world(const_cast<Simulator&>(sim)); }
 
 }  // namespace kestrel::sim

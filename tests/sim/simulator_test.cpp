@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -60,7 +61,7 @@ TEST(SimulatorRigid, ViewsAgreeWithWorldState) {
   for (int s = 0; s < 120; ++s) {
     sim->step(nullptr);  // the World's own setpoint actions
     twin->step(1);
-    World& w = *sim->world();
+    World& w = *rigid_world(*sim);
     for (int e = 0; e < sim->num_envs(); ++e) {
       saw_reset = saw_reset || sim->reset_buf()[e] != 0;
       const std::size_t i = static_cast<std::size_t>(e);
@@ -135,7 +136,7 @@ TEST(SimulatorRigid, ResetRootStatesPutsExactStates) {
   ASSERT_TRUE(sim->reset_root_states(ids, 2, pos, quat, lin, ang)) << sim->last_error();
   for (int k = 0; k < 2; ++k) {
     const std::size_t i = static_cast<std::size_t>(ids[k]);
-    const RigidBodyState& st = sim->world()->robot_state(ids[k], 0);
+    const RigidBodyState& st = rigid_world(*sim)->robot_state(ids[k], 0);
     for (int j = 0; j < 3; ++j) {
       EXPECT_EQ(sim->base_pos_w()[3 * i + j], pos[3 * k + j]);
       EXPECT_EQ(st.position_w[j], pos[3 * k + j]);
@@ -144,17 +145,17 @@ TEST(SimulatorRigid, ResetRootStatesPutsExactStates) {
     for (int j = 0; j < 4; ++j) EXPECT_EQ(sim->base_quat_xyzw()[4 * i + j], quat[4 * k + j]);
     const Vec3 w_w = rotate(st.orientation_wb, st.angvel_b);  // stored in the body frame
     for (int j = 0; j < 3; ++j) EXPECT_NEAR(w_w[j], ang[3 * k + j], 1e-6);
-    EXPECT_TRUE(sim->world()->contact_force_w(ids[k], 0).isZero());
+    EXPECT_TRUE(rigid_world(*sim)->contact_force_w(ids[k], 0).isZero());
   }
   // Bad input: nothing written.
-  const RigidBodyState before = sim->world()->robot_state(1, 0);
+  const RigidBodyState before = rigid_world(*sim)->robot_state(1, 0);
   const real bad_quat[8] = {0, 0, 0, 2, 0, 0, 0, 1};
   EXPECT_FALSE(sim->reset_root_states(ids, 2, pos, bad_quat, lin, ang));
   EXPECT_NE(sim->last_error().find("unit length"), std::string::npos);
   const int bad_id[1] = {9};
   EXPECT_FALSE(sim->reset_root_states(bad_id, 1, pos, quat, lin, ang));
   EXPECT_NE(sim->last_error().find("out of range"), std::string::npos);
-  EXPECT_EQ(sim->world()->robot_state(1, 0).position_w, before.position_w);
+  EXPECT_EQ(rigid_world(*sim)->robot_state(1, 0).position_w, before.position_w);
 }
 
 TEST(SimulatorRigid, PushRobotsBoundedAndDeterministic) {
@@ -165,26 +166,26 @@ TEST(SimulatorRigid, PushRobotsBoundedAndDeterministic) {
   std::unique_ptr<Simulator> a = make_simulator(cfg, Backend::rigid, err), b = make_simulator(cfg, Backend::rigid, err);
   ASSERT_TRUE(a && b) << err;
   for (int round = 0; round < 3; ++round) {
-    const Vec3 vz_before(0, 0, a->world()->robot_state(0, 0).linvel_w[2]);
+    const Vec3 vz_before(0, 0, rigid_world(*a)->robot_state(0, 0).linvel_w[2]);
     a->push_robots();
     b->push_robots();
     real max_abs = 0;
     for (int e = 0; e < a->num_envs(); ++e) {
-      const RigidBodyState& s = a->world()->robot_state(e, 0);
+      const RigidBodyState& s = rigid_world(*a)->robot_state(e, 0);
       EXPECT_LE(std::fabs(s.linvel_w[0]), 0.75_r);
       EXPECT_LE(std::fabs(s.linvel_w[1]), 0.75_r);
       max_abs = std::max(max_abs, std::max(std::fabs(s.linvel_w[0]), std::fabs(s.linvel_w[1])));
-      EXPECT_EQ(s.linvel_w, b->world()->robot_state(e, 0).linvel_w);  // same seed, same kicks
+      EXPECT_EQ(s.linvel_w, rigid_world(*b)->robot_state(e, 0).linvel_w);  // same seed, same kicks
       // The view is refreshed: body-frame velocity rotated back is the pushed world velocity.
       const Vec3 vb(a->base_lin_vel_b()[3 * e], a->base_lin_vel_b()[3 * e + 1], a->base_lin_vel_b()[3 * e + 2]);
       EXPECT_LT((rotate(s.orientation_wb, vb) - s.linvel_w).norm(), 1e-5);
     }
-    EXPECT_EQ(a->world()->robot_state(0, 0).linvel_w[2], vz_before[2]);  // z untouched
+    EXPECT_EQ(rigid_world(*a)->robot_state(0, 0).linvel_w[2], vz_before[2]);  // z untouched
     EXPECT_GT(max_abs, 0.3_r);  // 16 robots x 2 draws in +-0.75: not all tiny
     a->step(nullptr);
     b->step(nullptr);
   }
-  EXPECT_NE(a->world()->robot_state(0, 0).linvel_w, a->world()->robot_state(1, 0).linvel_w);
+  EXPECT_NE(rigid_world(*a)->robot_state(0, 0).linvel_w, rigid_world(*a)->robot_state(1, 0).linvel_w);
   EXPECT_EQ(a->state_hash(), b->state_hash());
 }
 

@@ -22,7 +22,7 @@
 //
 // What a task sits on (the narrow API): num_envs/num_robots/action_dim, step(actions) with
 // post_physics_step's reset_buf, reset_idx, reset_root_states, push_robots, the base_* views,
-// contact_forces_w/crashed, target_w, lidar_ranges_m (or world()->sensor_* on rigid), env_bounds,
+// contact_forces_w/crashed, target_w, lidar_ranges_m (or rigid_world(sim)->sensor_* on rigid, sim/rigid_backend.hpp), env_bounds,
 // set_auto_reset / set_curriculum_level (the task owns episode ends and the obstacle curriculum),
 // and the domain-randomisation views for privileged observations. Nothing else of either backend
 // (the planar tasks, sim/src/tasks/planar_tasks.cpp, use exactly this).
@@ -38,8 +38,10 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/kernel/rng.hpp"
 #include "kestrel/sim/config.hpp"
-#include "kestrel/sim/world.hpp"
+#include "kestrel/sim/summary.hpp"
 
 namespace kestrel::sim {
 
@@ -131,7 +133,7 @@ class Simulator {
   /// Active controller gains / nominal gains (Lee: mean over the 12 gain components).
   const real* controller_gain_scale() const { return gain_scale_.data(); }
 
-  /// 2-D lidar (planar; 0 beams on rigid, whose ray sensors are the World's, world()->sensor_*).
+  /// 2-D lidar (planar; 0 beams on rigid, whose ray sensors are the World's, rigid_world(sim)->sensor_*).
   int lidar_beams() const { return lidar_beams_; }
   const real* lidar_ranges_m() const { return lidar_.data(); }  // (robots x beams), max range = no hit
   /// Beam k's angle in the body frame (rad, counter-clockwise from body x).
@@ -160,8 +162,6 @@ class Simulator {
   virtual WorldSummary summary() const = 0;
   /// FNV-1a over every environment's state, in environment order (as World::state_hash).
   virtual std::uint64_t state_hash() const = 0;
-  /// The rigid backend's World (nullptr on planar).
-  virtual World* world() { return nullptr; }
   const std::string& last_error() const { return error_; }
 
  protected:
