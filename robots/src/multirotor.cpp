@@ -8,8 +8,10 @@ namespace al = kestrel::allocation;
 
 const char* robot_kind_name(RobotKind kind) {
   switch (kind) {
-    case RobotKind::multirotor: return "multirotor";
-    case RobotKind::ground_vehicle: return "ground_vehicle";
+    case RobotKind::multirotor:
+      return "multirotor";
+    case RobotKind::ground_vehicle:
+      return "ground_vehicle";
   }
   return "unknown";
 }

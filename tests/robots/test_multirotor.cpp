@@ -37,7 +37,9 @@ RigidBodyState off_hover_state(int k) {
   return s;
 }
 
-bool bits_equal(const real* a, const real* b, int n) { return std::memcmp(a, b, sizeof(real) * static_cast<std::size_t>(n)) == 0; }
+bool bits_equal(const real* a, const real* b, int n) {
+  return std::memcmp(a, b, sizeof(real) * static_cast<std::size_t>(n)) == 0;
+}
 
 }  // namespace
 

@@ -27,7 +27,8 @@ bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, s
   }
   if (al::make_airframe(spec, m.airframe) != Status::ok) return fail("robot.airframe: invalid airframe");
   const Status am = al::build_allocation_model(m.airframe, m.allocation);
-  if (am != Status::ok && am != Status::singular) return fail("robot.airframe: allocation model failed");  // quads: rank 4
+  if (am != Status::ok && am != Status::singular)
+    return fail("robot.airframe: allocation model failed");  // quads: rank 4
   m.motors = al::motor_model_preset(rc.airframe);
   if (n_urdf_rotors > 0) {
     m.motors.num_motors = spec.num_rotors;
@@ -36,7 +37,8 @@ bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, s
   if (al::validate(m.motors) != Status::ok) return fail("robot.motor_model: invalid motor model");
   m.use_motor_model = true;
   m.desat = al::SequentialDesaturationParams();
-  m.allocator = rc.use_desaturation ? robots::AllocatorKind::sequential_desaturation : robots::AllocatorKind::pseudo_inverse;
+  m.allocator =
+      rc.use_desaturation ? robots::AllocatorKind::sequential_desaturation : robots::AllocatorKind::pseudo_inverse;
   m.controller = config.controller.kind;
   m.ctrl.lee = rc.airframe == al::AirframePreset::base_rov ? lee_params_rov() : lee_params_base_quadrotor();
   m.ctrl.lee.mass_kg = rc.mass_kg;

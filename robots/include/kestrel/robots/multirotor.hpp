@@ -54,9 +54,9 @@ enum class AllocatorKind : std::uint8_t {
 /// Constant after set-up.
 struct MultirotorModel {
   ControllerKind controller = ControllerKind::lee_position;
-  ControllerParams ctrl;                      // the controller table's parameters (Lee, direct motors)
-  allocation::Airframe airframe;              // geometry, limits, effectiveness A (wrench = A f)
-  allocation::AllocationModel allocation;     // A+, masks and limits the allocators read
+  ControllerParams ctrl;                   // the controller table's parameters (Lee, direct motors)
+  allocation::Airframe airframe;           // geometry, limits, effectiveness A (wrench = A f)
+  allocation::AllocationModel allocation;  // A+, masks and limits the allocators read
   AllocatorKind allocator = AllocatorKind::sequential_desaturation;
   allocation::SequentialDesaturationParams desat;
   allocation::MotorModelConfig motors;
@@ -74,7 +74,7 @@ struct MultirotorState {
 
 /// Outputs of one actuation, kept by the caller (firmware reports them, the C API copies them).
 struct MultirotorOutput {
-  ControllerOutput command;               // the controller's wrench (or direct thrusts)
+  ControllerOutput command;                 // the controller's wrench (or direct thrusts)
   allocation::AllocationResult allocation;  // thrust setpoints (wrench controllers; else the direct thrusts)
 };
 
@@ -102,8 +102,9 @@ struct MultirotorOutput {
                                         MultirotorOutput& out);
 
 /// multirotor_control with the model's controller, then multirotor_actuate; the first non-ok status.
-[[nodiscard]] Status multirotor_step(const MultirotorModel& model, MultirotorState& state, const RigidBodyState& estimate,
-                                     const real* action, std::size_t action_len, real dt_s, MultirotorOutput& out);
+[[nodiscard]] Status multirotor_step(const MultirotorModel& model, MultirotorState& state,
+                                     const RigidBodyState& estimate, const real* action, std::size_t action_len,
+                                     real dt_s, MultirotorOutput& out);
 
 /// The rotor wrench on the body, [fx fy fz tx ty tz] in the body frame, from the motors' thrusts.
 inline Wrench multirotor_wrench(const MultirotorModel& model, const MultirotorState& state) {

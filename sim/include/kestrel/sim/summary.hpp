@@ -9,14 +9,14 @@ namespace kestrel::sim {
 /// Per-environment counters (summed over its episodes).
 struct EnvStats {
   std::uint64_t env_steps = 0;
-  std::uint32_t crashes = 0;       // env-steps ending with a robot above the force threshold
-  std::uint32_t resets = 0;        // resets after set-up (crash, timeout, out of bounds)
+  std::uint32_t crashes = 0;  // env-steps ending with a robot above the force threshold
+  std::uint32_t resets = 0;   // resets after set-up (crash, timeout, out of bounds)
   std::uint32_t timeouts = 0;
   std::uint32_t out_of_bounds = 0;
   std::uint32_t episodes_done = 0;
-  std::uint32_t successes = 0;     // episodes that ended (timeout) within the success radius
-  double tracking_error_sum_m = 0; // sum over env-steps and robots of |setpoint - position|
-  double final_distance_sum_m = 0; // sum over finished episodes of the mean robot distance to target
+  std::uint32_t successes = 0;            // episodes that ended (timeout) within the success radius
+  double tracking_error_sum_m = 0;        // sum over env-steps and robots of |setpoint - position|
+  double final_distance_sum_m = 0;        // sum over finished episodes of the mean robot distance to target
   std::uint32_t placement_fallbacks = 0;  // robot placements with no clear (start, target) pair
 };
 
@@ -25,10 +25,10 @@ struct WorldSummary {
   std::uint64_t crashes = 0, resets = 0, timeouts = 0, out_of_bounds = 0, episodes_done = 0, successes = 0;
   std::uint64_t placement_fallbacks = 0;
   double mean_tracking_error_m = 0;
-  double final_mean_distance_m = 0;  // mean distance to target over robots at the end of the run
-  double episode_end_distance_m = 0; // mean distance to target when an episode ends (any reason)
-  std::uint32_t fault_bits = 0;      // OR of every robot's latched chain faults (kernel/status.hpp)
-  std::uint64_t reset_errors = 0;    // non-ok statuses from the core while resetting robots
+  double final_mean_distance_m = 0;   // mean distance to target over robots at the end of the run
+  double episode_end_distance_m = 0;  // mean distance to target when an episode ends (any reason)
+  std::uint32_t fault_bits = 0;       // OR of every robot's latched chain faults (kernel/status.hpp)
+  std::uint64_t reset_errors = 0;     // non-ok statuses from the core while resetting robots
 };
 
 /// Adds one environment's event counters to a summary's totals (both backends summarise this way;
