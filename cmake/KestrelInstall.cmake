@@ -19,7 +19,7 @@ set(KESTREL_INSTALL_TOOLCHAINDIR "${CMAKE_INSTALL_DATADIR}/kestrel/cmake" CACHE 
 # the determinism flags and KESTREL_USE_DOUBLE to consumers; kestrel_core_flags is only a
 # link-time dependency of the core libraries' (empty) link interface but must be exported too.
 set(_kestrel_export_targets kestrel_flags kestrel_core_flags kestrel_kernel kestrel_controllers kestrel_allocation
-    kestrel_robots kestrel_platform kestrel_capi)
+    kestrel_robots kestrel_policy kestrel_platform kestrel_capi)
 if(TARGET kestrel_sensors)
   list(APPEND _kestrel_export_targets kestrel_sensors)
 endif()
@@ -43,7 +43,7 @@ install(TARGETS ${_kestrel_export_targets} EXPORT kestrelTargets
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 
 # Headers: every layer's include/ tree (kestrel/<layer>/...), the C API's kestrel/kestrel.h.
-foreach(_dir kernel controllers allocation robots sensors platform platform/capi)
+foreach(_dir kernel controllers allocation robots policy sensors platform platform/capi)
   if(EXISTS "${PROJECT_SOURCE_DIR}/${_dir}/include/kestrel")
     install(DIRECTORY "${PROJECT_SOURCE_DIR}/${_dir}/include/kestrel" DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
   endif()

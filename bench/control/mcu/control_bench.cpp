@@ -32,6 +32,7 @@
 #include "kestrel/kestrel.h"
 #include "kestrel/platform/board.hpp"
 #include "kestrel/platform/console.hpp"
+#include "kestrel/policy/mlp.hpp"
 #include "kestrel/sensors/ray_sensor.hpp"
 
 namespace board = kestrel::platform::board;
@@ -69,6 +70,37 @@ int g_failures = 0;
 kestrel::sensors::SceneStorage<8> g_tof_storage;
 real g_tof_dirs[3 * 64], g_tof_scale[64], g_tof_range[64];
 std::int32_t g_tof_seg[64];
+
+// A 64-64 policy network of the size Learning to Fly runs on the STM32F405 (13 position-setpoint
+// observations in, 4 actions out), with PyTorch-scale random weights.
+using BenchMlp = kestrel::policy::MlpParams<13, 64, 64, 4>;
+BenchMlp g_mlp;
+real g_mlp_obs[13], g_mlp_action[4];
+
+void init_mlp(kestrel::policy::Activation a) {
+  RngStream r(5, 0, kPurposeUser);
+  g_mlp.activation = a;
+  g_mlp.obs_clip = 5;
+  for (int i = 0; i < 13; ++i) {
+    g_mlp.obs_mean[i] = 0;
+    g_mlp.obs_inv_std[i] = 1;
+    g_mlp_obs[i] = r.uniform(-1, 1);
+  }
+  for (int o = 0; o < 64; ++o) {
+    for (int i = 0; i < 13; ++i) g_mlp.hidden1.weight[o][i] = r.uniform(-0.27_r, 0.27_r);
+    g_mlp.hidden1.bias[o] = r.uniform(-0.27_r, 0.27_r);
+    for (int i = 0; i < 64; ++i) g_mlp.hidden2.weight[o][i] = r.uniform(-0.125_r, 0.125_r);
+    g_mlp.hidden2.bias[o] = r.uniform(-0.125_r, 0.125_r);
+  }
+  for (int o = 0; o < 4; ++o) {
+    for (int i = 0; i < 64; ++i) g_mlp.output.weight[o][i] = r.uniform(-0.125_r, 0.125_r);
+    g_mlp.output.bias[o] = 0;
+    g_mlp.action_low[o] = -1;
+    g_mlp.action_high[o] = 1;
+    g_mlp.action_scale[o] = 1;
+    g_mlp.action_offset[o] = 0;
+  }
+}
 
 Quad g_saved_quad, g_saved_hexa;  // state restored before every timed pass
 ControllerState g_saved_ctrl[kNumControllerKinds];
@@ -343,6 +375,13 @@ int main() {
     bench("tof_scan_vl53l5cx_8x8", "scene_4_objects", 10,
           [] { g_sink = static_cast<std::uint32_t>(se::render(scene, pose, table, tof.range, false, out)); });
   }
+  // The policy network (policy/mlp.hpp): one inference per call, tanh (SB3) and ELU (rsl_rl).
+  init_mlp(kestrel::policy::Activation::tanh);
+  bench("mlp_forward_13_64_64_4_tanh", "policy", 20,
+        [] { g_sink = static_cast<std::uint32_t>(kestrel::policy::mlp_forward(g_mlp, g_mlp_obs, g_mlp_action)); });
+  init_mlp(kestrel::policy::Activation::elu);
+  bench("mlp_forward_13_64_64_4_elu", "policy", 20,
+        [] { g_sink = static_cast<std::uint32_t>(kestrel::policy::mlp_forward(g_mlp, g_mlp_obs, g_mlp_action)); });
   // The plant the firmware example closes the loop with (not part of the control stack).
   const Wrench hover_w = Wrench::from_vec6(hover_q);
   bench("step_rigid_body_rk4", "base_quadrotor", kCalls,

@@ -3,6 +3,9 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 
 #include "kestrel/kernel/types.hpp"
 
@@ -144,6 +147,72 @@ inline void sin_cos(real x, real& s, real& c) {
   c = std::cos(x);
 #else
   detail::sincos_f32(x, s, c);
+#endif
+}
+
+/// e^x and tanh(x) with identical bits on the host and every MCU (no libm: libm's expf/tanhf
+/// differ between glibc and newlib in the last bit), for the policy network's activations.
+/// Float algorithms after S. L. Moshier's Cephes expf and tanhf (range reduction by ln 2 split
+/// into an exact and a small part, degree-5 minimax polynomial; tanh by a degree-5 odd polynomial
+/// below 0.625 and 1 - 2 / (e^2x + 1) above): about 1 ulp of float. Double builds (host only) use
+/// the library.
+namespace detail {
+inline float exp_f32(float x) {
+  if (!(x == x)) return x;                    // NaN
+  if (x > 88.72283905206835f) return std::numeric_limits<float>::infinity();
+  if (x < -103.972077083991796f) return 0.0f;
+  constexpr float kLog2e = 1.44269504088896341f;
+  float zf = kLog2e * x + 0.5f;
+  int n = static_cast<int>(zf);
+  if (zf < 0 && static_cast<float>(n) != zf) --n;  // floor
+  const float fn = static_cast<float>(n);
+  float r = x - fn * 0.693359375f;
+  r = r - fn * -2.12194440e-4f;
+  const float z = r * r;
+  float y = ((((1.9875691500e-4f * r + 1.3981999507e-3f) * r + 8.3334519073e-3f) * r + 4.1665795894e-2f) * r +
+             1.6666665459e-1f) * r + 5.0000001201e-1f;
+  y = y * z + r + 1.0f;
+  // y * 2^n in two exact power-of-two steps (n may reach -150 on the way to a subnormal).
+  auto pow2 = [](int e) {
+    const std::uint32_t u = static_cast<std::uint32_t>(e + 127) << 23;
+    float f;
+    std::memcpy(&f, &u, sizeof f);
+    return f;
+  };
+  if (n > 127) return y * pow2(127) * pow2(n - 127);
+  if (n < -126) return y * pow2(-126) * pow2(n + 126 < -126 ? -126 : n + 126);
+  return y * pow2(n);
+}
+inline float tanh_f32(float x) {
+  const bool neg = x < 0;
+  const float ax = neg ? -x : x;
+  float t;
+  if (ax > 0.625f) {
+    if (ax > 9.01091334f) return neg ? -1.0f : 1.0f;  // tanh rounds to 1 in float
+    const float e = exp_f32(2 * ax);
+    t = 1.0f - 2.0f / (e + 1.0f);
+  } else {
+    if (!(ax == ax)) return x;
+    const float z = ax * ax;
+    t = ((((-5.70498872745e-3f * z + 2.06390887954e-2f) * z - 5.37397155531e-2f) * z + 1.33314422036e-1f) * z -
+         3.33332819422e-1f) * z * ax + ax;
+  }
+  return neg ? -t : t;
+}
+}  // namespace detail
+
+inline real exp_det(real x) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return std::exp(x);
+#else
+  return detail::exp_f32(x);
+#endif
+}
+inline real tanh_det(real x) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return std::tanh(x);
+#else
+  return detail::tanh_f32(x);
 #endif
 }
 
