@@ -1,4 +1,5 @@
 // Task base and position_setpoint_task (see task.hpp for the API and the reference it follows).
+#include "kestrel/policy/observations.hpp"
 #include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/task.hpp"
 
@@ -83,7 +84,7 @@ void vehicle_frame_error(const float q[4], const float err[3], float out[3]) {
 
 namespace {
 
-constexpr int kPsObsDim = 13;
+constexpr int kPsObsDim = policy::kPositionSetpointObsDim;
 constexpr int kPsActionDim = 4;
 constexpr float kActionClip = 10.0f;  // Aerial Gym robot: actions clipped to +-10 (quirk 7)
 
@@ -215,14 +216,10 @@ class PositionSetpointTask final : public Task {
   }
 
   // Aerial Gym process_obs_for_task: [target - position, quaternion xyzw, body linvel, body angvel].
+  // (policy/observations.hpp: the same builder the firmware uses.)
   void write_obs(int env) {
-    const RigidBodyState& st = world_->robot_state(env, 0);
-    float* o = &obs_[static_cast<std::size_t>(env) * kPsObsDim];
-    float w[3];
-    state_inputs(env, o + 3, o, w);
-    const Vec3 v_b = rotate_inverse(st.orientation_wb, st.linvel_w);
-    for (int k = 0; k < 3; ++k) o[7 + k] = static_cast<float>(v_b[k]);
-    for (int k = 0; k < 3; ++k) o[10 + k] = w[k];
+    policy::position_setpoint_observation(world_->robot_state(env, 0), world_->target(env, 0),
+                                          &obs_[static_cast<std::size_t>(env) * kPsObsDim]);
   }
 
   std::vector<double> episode_reward_;
