@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+
+#include "kestrel/sim/limits.hpp"
 
 namespace kestrel::sim {
 
@@ -110,8 +113,19 @@ bool load_mesh(const std::string& path, TriangleMesh& out, std::string& error) {
   TriangleMesh m;
   if (!(ext == ".stl" ? load_stl(path, bytes, m, error) : load_obj(path, bytes, m, error))) return false;
   if (m.triangles.empty()) return fail(error, path, "no triangles");
-  for (const Vec3& v : m.vertices)
-    if (!v.allFinite()) return fail(error, path, "non-finite vertex coordinate");
+  // Bounded, not only finite (fuzz F3): a hull ~5e22 m long made libccd's MPR loop forever, and
+  // coordinates of ~1e9 m overflowed the trajectory plot. |x|, |y|, |z| <= kMaxMeshCoordinateM.
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const Vec3& v = m.vertices[i];
+    for (int k = 0; k < 3; ++k) {
+      if (std::isfinite(v[k]) && std::fabs(static_cast<double>(v[k])) <= kMaxMeshCoordinateM) continue;
+      std::ostringstream s;
+      s << "vertex " << i + 1 << " coordinate " << "xyz"[k] << " = " << static_cast<double>(v[k])
+        << " is out of range; allowed: a finite value with |" << "xyz"[k] << "| <= " << kMaxMeshCoordinateM
+        << " m (kMaxMeshCoordinateM, sim/limits.hpp)";
+      return fail(error, path, s.str());
+    }
+  }
   out = std::move(m);
   return true;
 }

@@ -2,6 +2,7 @@
 // convex hull: a unit cube loaded from each format must answer like the analytic box.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -167,4 +168,65 @@ TEST(SimMesh, MeshObstaclesInAWorld) {
   c.env.assets[0].mesh_file = tmp("nope.stl");
   EXPECT_FALSE(World::create(c, err));
   EXPECT_NE(err.find("env.assets.cubes"), std::string::npos) << err;
+}
+
+// Fuzz finding F3: a 4-vertex OBJ obstacle ~5e22 m long made libccd's MPR loop forever (its portal
+// loops ignore max_iterations), so `kestrel run` hung in the first steps. Mesh coordinates are
+// bounded at load, with the file, the vertex, the field and the allowed range in the message.
+TEST(SimMesh, FarVerticesAreRefusedAtLoad) {
+  const std::string data = std::string(KESTREL_SIM_TEST_DIR) + "/data/";
+  TriangleMesh m;
+  std::string err;
+  EXPECT_FALSE(load_mesh(data + "fuzz_f3_long.obj", m, err));
+  EXPECT_NE(err.find("fuzz_f3_long.obj: vertex 2 coordinate x = -5e+22 is out of range; allowed: a finite value with |x| <= "
+                     "1e+06 m (kMaxMeshCoordinateM"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(load_mesh(data + "fuzz_f2_far.obj", m, err));  // the F2 file: 1e9 m
+  EXPECT_NE(err.find("vertex 2 coordinate x = -1e+09 is out of range"), std::string::npos) << err;
+  EXPECT_TRUE(m.vertices.empty());
+  // At the bound: accepted.
+  const std::string p = tmp("edge.obj");
+  std::ofstream(p) << "v 0 0 0\nv -1e6 0 0\nv 0 0.5 5\nf 1 2 3\n";
+  EXPECT_TRUE(load_mesh(p, m, err)) << err;
+  // Through a scenario's asset class (the fuzz report's scene): refused at set-up, naming the class.
+  WorldConfig c;
+  ASSERT_TRUE(registries().envs.make("empty", c.env));
+  c.env.num_envs = 1;
+  AssetClass a;
+  a.name = "m";
+  a.kind = AssetKind::mesh;
+  a.mesh_file = data + "fuzz_f3_long.obj";
+  a.num_assets = a.min_num_assets = 2;
+  a.max_angular_speed_rad_s = 1;
+  c.env.assets.push_back(a);
+  EXPECT_FALSE(World::create(c, err));
+  EXPECT_NE(err.find("env.assets.m: "), std::string::npos) << err;
+  EXPECT_NE(err.find("kMaxMeshCoordinateM"), std::string::npos) << err;
+}
+
+// F3's second line of defence: a hull built in code (no loader) with the 5e22 m vertex still
+// returns from collide() (the MPR call has a budget of support calls), answering "no contact".
+TEST(SimMesh, MprGivesUpInsteadOfLoopingOnAbsurdHulls) {
+  const Vec3 v[4] = {Vec3(0, 0, 0), Vec3(-5e22_r, 0, 0), Vec3(0, 0.5_r, 5), Vec3(1, -5.5_r, 0)};
+  Shape hull;
+  hull.type = ShapeType::convex_hull;
+  hull.vertices = v;
+  hull.num_vertices = 4;
+  hull.position_w = Vec3(1, 1, 1);
+  hull.orientation_wb = Quat(Eigen::AngleAxis<real>(0.3_r, Vec3(0, 0, 1)));
+  for (ShapeType t : {ShapeType::box, ShapeType::cylinder, ShapeType::capsule}) {
+    Shape robot;
+    robot.type = t;
+    robot.radius_m = 0.2_r;
+    robot.half_length_m = 0.1_r;
+    robot.half_extents_m = Vec3(0.15_r, 0.15_r, 0.05_r);
+    for (const Vec3& off : {Vec3(0, 0, 0), Vec3(0.5_r, 0.2_r, 1), Vec3(-3, 0, 0.5_r)}) {
+      robot.position_w = hull.position_w + off;
+      const Contact k = collide(robot, hull);  // returns (before the guard: never)
+      if (k.hit) {
+        EXPECT_TRUE(std::isfinite(k.depth_m));
+      }
+    }
+  }
 }
