@@ -100,9 +100,16 @@ Vec6 realized_wrench(const AllocationModel& model, const real* thrust_N) {
   return out;
 }
 
-void finish_allocation(const AllocationModel& model, AllocatorState& state, const Vec6& wrench_cmd,
-                       AllocationResult& out) {
+Status finish_allocation(const AllocationModel& model, AllocatorState& state, const Vec6& wrench_cmd,
+                         AllocationResult& out) {
   const int n = model.num_rotors;
+  // clamp() passes NaN through: a finite command near the float limit can overflow A+ w to inf
+  // and the solvers' differences (inf - inf) to NaN. Checked before anything is stored, so the held
+  // output (state.last_thrust_N) stays the last finite one. (+-inf alone clamps to the limit it
+  // overflowed towards, which is the saturated answer.)
+  for (int i = 0; i < n; ++i) {
+    if (std::isnan(out.thrust_N[i])) return hold_nonfinite_result(model, state, out);
+  }
   for (int i = 0; i < n; ++i) {
     out.thrust_N[i] = clamp(out.thrust_N[i], model.thrust_min_N[i], model.thrust_max_N[i]);
     state.last_thrust_N[i] = out.thrust_N[i];
@@ -111,13 +118,18 @@ void finish_allocation(const AllocationModel& model, AllocatorState& state, cons
   out.wrench_realized = realized_wrench(model, out.thrust_N);
   out.wrench_unallocated = wrench_cmd - out.wrench_realized;
   if (out.any_saturated()) state.faults.raise(kFaultSaturated);
+  return Status::ok;
 }
 
-Status hold_allocation(const AllocationModel& model, AllocatorState& state, AllocationResult& out) {
+namespace {
+// Holds state.last_thrust_N (clamped into the current limits; a non-finite held value, which the
+// allocators never store, would become the lower limit), latches `fault`.
+void hold(const AllocationModel& model, AllocatorState& state, AllocationResult& out, std::uint32_t fault) {
   const int n = model.num_rotors;
   const bool have_last = state.num_rotors == n;
   for (int i = 0; i < n; ++i) {
-    const real held = have_last ? state.last_thrust_N[i] : real(0);
+    real held = have_last ? state.last_thrust_N[i] : real(0);
+    if (!is_finite(held)) held = model.thrust_min_N[i];
     out.thrust_N[i] = clamp(held, model.thrust_min_N[i], model.thrust_max_N[i]);
     state.last_thrust_N[i] = out.thrust_N[i];
   }
@@ -127,8 +139,18 @@ Status hold_allocation(const AllocationModel& model, AllocatorState& state, Allo
   out.iterations = 0;
   out.wrench_realized = realized_wrench(model, out.thrust_N);
   out.wrench_unallocated.setZero();
-  state.faults.raise(kFaultNonFiniteCommand);
+  state.faults.raise(fault);
+}
+}  // namespace
+
+Status hold_allocation(const AllocationModel& model, AllocatorState& state, AllocationResult& out) {
+  hold(model, state, out, kFaultNonFiniteCommand);
   return Status::non_finite_input;
+}
+
+Status hold_nonfinite_result(const AllocationModel& model, AllocatorState& state, AllocationResult& out) {
+  hold(model, state, out, kFaultNonFiniteOutput);
+  return Status::non_finite_output;
 }
 
 }  // namespace detail
@@ -147,8 +169,7 @@ Status allocate_pinv(const AllocationModel& model, AllocatorState& state, const 
   out.saturated_low_mask = low;
   out.saturated_high_mask = high;
   out.iterations = 0;
-  detail::finish_allocation(model, state, wrench_cmd, out);
-  return Status::ok;
+  return detail::finish_allocation(model, state, wrench_cmd, out);
 }
 
 }  // namespace kestrel::allocation

@@ -230,7 +230,7 @@ Status allocate_cls(const AllocationModel& model, const ClsParams& params, Alloc
   out.saturated_low_mask = low;
   out.saturated_high_mask = high;
   out.iterations = iter;
-  detail::finish_allocation(model, state, wrench_cmd, out);
+  if (const Status fs = detail::finish_allocation(model, state, wrench_cmd, out); fs != Status::ok) return fs;
   if (!converged) {
     state.faults.raise(kFaultNotConverged);
     return Status::not_converged;

@@ -161,10 +161,12 @@ Status step_motors(const MotorModelConfig& cfg, MotorModelState& state, const re
     real f_new = x_new;
     if constexpr (kRps) f_new = c * x_new * x_new;
     if (!is_finite(f_new)) {
-      // Cannot happen with a validated config and finite state; kept as the last line of defence
-      // so the state never holds NaN.
+      // Cannot happen with a validated config, finite state and a sane dt; kept as the last line of
+      // defence so the state never holds NaN. A huge dt (e.g. 1e18 s) does get here: reported as a
+      // status too, not only as a latched fault, so a caller checking the status sees the fallback.
       f_new = clamp(f, lo, hi);
       state.faults.raise(kFaultNonFiniteOutput);
+      if (status == Status::ok) status = Status::non_finite_output;
     }
     state.thrust_N[i] = f_new;
     state.axial_torque_Nm[i] = -static_cast<real>(cfg.direction[i]) * ratio * f_new;

@@ -118,9 +118,10 @@ inline void mix_yaw(Work<kN>& w, const Direction& yaw, const Direction& thrust, 
   desaturate(w, thrust, GainSign::non_positive);
 }
 
-/// The output stage of allocate (see there); kNoFxFy: rows fx, fy of A are all zero.
+/// The output stage of allocate (see there); kNoFxFy: rows fx, fy of A are all zero. Returns false,
+/// having stored nothing in `state`, when a thrust is NaN (see allocate).
 template <int kN, bool kNoFxFy>
-inline void finish(const AllocationModel& model, Work<kN>& w, bool feasible, const Vec6& wrench_cmd,
+inline bool finish(const AllocationModel& model, Work<kN>& w, bool feasible, const Vec6& wrench_cmd,
                    AllocatorState& state, AllocationResult& out) {
   const int n = w.count();
   std::uint16_t low = 0, high = 0;
@@ -136,7 +137,6 @@ inline void finish(const AllocationModel& model, Work<kN>& w, bool feasible, con
     }
     if (!feasible) f = clamp(f, lo, hi);  // feasible: already within [lo, hi]
     out.thrust_N[i] = f;
-    state.last_thrust_N[i] = f;
     if constexpr (!kNoFxFy) {
       r0 += a(0, i) * f;
       r1 += a(1, i) * f;
@@ -146,6 +146,11 @@ inline void finish(const AllocationModel& model, Work<kN>& w, bool feasible, con
     r4 += a(4, i) * f;
     r5 += a(5, i) * f;
   });
+  // A NaN thrust (clamp() lets NaN through) makes r2 NaN: every thrust enters r2, and 0 * NaN is
+  // NaN. Otherwise every thrust is within its limits and r2 is finite. One compare on the common
+  // path; the held output is stored only after it, so it can never become NaN.
+  if (!(r2 == r2)) return false;
+  for_rotors<kN>(n, [&](int i) __attribute__((always_inline)) { state.last_thrust_N[i] = out.thrust_N[i]; });
   out.saturated_low_mask = low;
   out.saturated_high_mask = high;
   out.iterations = 0;
@@ -163,6 +168,7 @@ inline void finish(const AllocationModel& model, Work<kN>& w, bool feasible, con
   out.wrench_unallocated(4) = wrench_cmd(kTy) - r4;
   out.wrench_unallocated(5) = wrench_cmd(kTz) - r5;
   if ((low | high) != 0) state.faults.raise(kFaultSaturated);
+  return true;
 }
 
 template <int kN>
@@ -224,11 +230,14 @@ Status allocate(const AllocationModel& model, const SequentialDesaturationParams
   // parallel to body z (every quadrotor preset) has rows fx, fy of A all zero
   // (model.wrench_row_mask): their sums would be exactly +0 for finite thrusts and command - 0 is
   // the command, so that case is compiled without them (~30 Cortex-M4F instructions per call).
-  if (kN > 0 && (model.wrench_row_mask & 3u) == 0) {
-    finish<kN, true>(model, w, feasible, wrench_cmd, state, out);
-  } else {
-    finish<kN, false>(model, w, feasible, wrench_cmd, state, out);
-  }
+  //
+  // A finite command near the float limit (a huge body rate or gain upstream) can overflow A+ w to
+  // +-inf and the desaturation's differences to NaN: finish() reports that instead of storing it,
+  // and the last finite output is held (kFaultNonFiniteOutput, Status::non_finite_output).
+  const bool finite = (kN > 0 && (model.wrench_row_mask & 3u) == 0)
+                          ? finish<kN, true>(model, w, feasible, wrench_cmd, state, out)
+                          : finish<kN, false>(model, w, feasible, wrench_cmd, state, out);
+  if (!finite) return detail::hold_nonfinite_result(model, state, out);
   return Status::ok;
 }
 

@@ -371,8 +371,11 @@ KESTREL_LEE_INLINE AttitudeFrame frame_of(const Quat& q_wb) {
 AttitudeFrame attitude_frame(const Quat& q_wb) { return frame_of(q_wb); }
 
 Status validate_lee_params(const LeeParams& p) {
-  if (!is_finite(p.mass_kg) || !(p.mass_kg > 0)) return Status::invalid_argument;
+  // The upper bounds (lee.hpp) refuse parameters with which overflow in the update is unavoidable.
+  if (!is_finite(p.mass_kg) || !(p.mass_kg > 0) || !(p.mass_kg <= kLeeMaxMassKg)) return Status::invalid_argument;
   if (!all_finite(p.inertia_b) || !all_finite(p.gravity_w)) return Status::invalid_argument;
+  if (!(p.inertia_b.cwiseAbs().maxCoeff() <= kLeeMaxInertiaKgm2)) return Status::invalid_argument;
+  if (!(p.gravity_w.cwiseAbs().maxCoeff() <= kLeeMaxGravityMps2)) return Status::invalid_argument;
   if (!is_finite(p.max_yaw_rate_radps) || !(p.max_yaw_rate_radps >= 0)) return Status::invalid_argument;
   if (!is_finite(p.action_min) || !is_finite(p.action_max) || !(p.action_min < p.action_max)) {
     return Status::invalid_argument;
@@ -385,6 +388,9 @@ Status validate_lee_params(const LeeParams& p) {
     if (!all_finite(*los[i]) || !all_finite(*his[i])) return Status::invalid_argument;
     for (int k = 0; k < 3; ++k) {
       if (!((*los[i])[k] <= (*his[i])[k])) return Status::invalid_argument;
+      if (!(std::fabs((*los[i])[k]) <= kLeeMaxGain) || !(std::fabs((*his[i])[k]) <= kLeeMaxGain)) {
+        return Status::invalid_argument;
+      }
     }
   }
   return Status::ok;

@@ -10,6 +10,7 @@ const char* to_string(Status s) {
     case Status::capacity_exceeded: return "capacity_exceeded";
     case Status::singular: return "singular";
     case Status::not_converged: return "not_converged";
+    case Status::non_finite_output: return "non_finite_output";
   }
   return "unknown";
 }

@@ -1,5 +1,5 @@
 // kestrel: the desktop harness's command line.
-//   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR [--image-env E]
+//   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR [--image-env E] [--max-memory-gib G]
 //   (with sensors in the scenario, DIR also gets env E's sensor images: sensor_<name>_*.png)
 //   kestrel list
 // With no scenario, `run` uses the embedded default (1024 quadrotors, position setpoints, forest).
@@ -11,10 +11,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
@@ -27,10 +30,14 @@ using namespace kestrel::sim;
 
 namespace {
 
+// What `run` is working on (the scenario file, --task ID or the embedded default), for main()'s
+// last-resort error messages.
+std::string g_label = "kestrel";
+
 int usage() {
   std::fprintf(stderr,
                "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
-               "                   [--task ID] [--policy scripted|zero]\n"
+               "                   [--task ID] [--policy scripted|zero] [--max-memory-gib G]\n"
                "       kestrel list\n");
   return 2;
 }
@@ -42,10 +49,10 @@ void list_one(const char* title, const Registry<T>& r) {
   for (const auto& n : r.names()) std::printf("  %-36s %s\n", n.c_str(), r.description(n).c_str());
 }
 
-bool parse_long(const char* s, long long lo, long long& out) {
+bool parse_long(const char* s, long long lo, long long hi, long long& out) {
   char* end = nullptr;
   out = std::strtoll(s, &end, 10);
-  return end != s && *end == '\0' && out >= lo;
+  return end != s && *end == '\0' && out >= lo && out <= hi;
 }
 
 // An RL task (sim/task.hpp) runs through its step() under the task's built-in scripted
@@ -106,21 +113,33 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
 int run(int argc, char** argv) {
   std::string scenario, out_dir = "kestrel_out", task_id;
   long long envs = -1, steps = 1000, threads = -1, seed = -1, image_env = 0;
+  double max_memory_gib = -1;
   bool quiet = false, scripted = true;
+  constexpr long long kNoMax = 0x7fffffffffffffffLL;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    auto value = [&](long long lo, long long& v) {
-      if (i + 1 >= argc || !parse_long(argv[i + 1], lo, v)) {
-        std::fprintf(stderr, "kestrel run: %s expects an integer >= %lld\n", a.c_str(), lo);
+    auto value = [&](long long lo, long long hi, long long& v) {
+      if (i + 1 >= argc || !parse_long(argv[i + 1], lo, hi, v)) {
+        if (hi == kNoMax) std::fprintf(stderr, "kestrel run: %s expects an integer >= %lld\n", a.c_str(), lo);
+        else std::fprintf(stderr, "kestrel run: %s expects an integer in [%lld, %lld]\n", a.c_str(), lo, hi);
         std::exit(2);
       }
       ++i;
     };
-    if (a == "--envs") value(1, envs);
-    else if (a == "--steps") value(1, steps);
-    else if (a == "--threads") value(1, threads);
-    else if (a == "--seed") value(0, seed);
-    else if (a == "--image-env") value(0, image_env);
+    if (a == "--envs") value(1, kMaxNumEnvs, envs);
+    else if (a == "--steps") value(1, kNoMax, steps);
+    else if (a == "--threads") value(1, kMaxThreads, threads);
+    else if (a == "--seed") value(0, kNoMax, seed);
+    else if (a == "--image-env") value(0, kMaxNumEnvs - 1, image_env);
+    else if (a == "--max-memory-gib") {
+      char* end = nullptr;
+      max_memory_gib = i + 1 < argc ? std::strtod(argv[i + 1], &end) : -1;
+      if (i + 1 >= argc || end == argv[i + 1] || *end != '\0' || !(max_memory_gib > 0) || !(max_memory_gib <= kMaxMemoryGiBSetting)) {
+        std::fprintf(stderr, "kestrel run: --max-memory-gib expects a number in (0, %.0f] (GiB)\n", kMaxMemoryGiBSetting);
+        return 2;
+      }
+      ++i;
+    }
     else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
     else if (a == "--quiet") quiet = true;
     else if (a == "--task" && i + 1 < argc) task_id = argv[++i];
@@ -145,6 +164,7 @@ int run(int argc, char** argv) {
   // --task alone: the task's own scene (as a scenario `task: ID` with no other section); with a
   // scenario: the scenario's scene with its task replaced.
   const std::string label = !scenario.empty() ? scenario : !task_id.empty() ? "--task " + task_id : "<embedded default>";
+  g_label = label;
   const bool ok = !scenario.empty()    ? load_scenario_file(scenario, cfg, err)
                   : !task_id.empty() ? load_scenario_string("task: " + task_id + "\n", label, cfg, err)
                                        : load_scenario_string(default_scenario_yaml(), label, cfg, err);
@@ -155,7 +175,10 @@ int run(int argc, char** argv) {
   if (!task_id.empty() && !scenario.empty() && !registries().tasks.make(task_id, cfg.task)) return 1;
   if (envs > 0) cfg.env.num_envs = static_cast<int>(envs);
   if (seed >= 0) cfg.seed = static_cast<std::uint64_t>(seed);
-  cfg.num_threads = threads > 0 ? static_cast<int>(threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // Default: every hardware thread, within kMaxThreads.
+  cfg.num_threads = threads > 0 ? static_cast<int>(threads)
+                                : static_cast<int>(std::min<unsigned>(kMaxThreads, std::max(1u, std::thread::hardware_concurrency())));
+  if (max_memory_gib > 0) cfg.max_memory_gib = max_memory_gib;
   // Physics backend (sim/simulator.hpp): KESTREL_SIMULATOR, else the scenario's `simulator:`, else rigid.
   Backend backend = Backend::rigid;
   if (!resolve_backend(cfg, backend, err)) {
@@ -249,9 +272,30 @@ int run(int argc, char** argv) {
   return 0;
 }
 
+int run_main(int argc, char** argv);
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Set-up may allocate (sim/ allocates while it is set up); the checks (sim/limits.hpp, the
+  // memory estimate) refuse what they can foresee with a message naming the field, and this is the
+  // last line for what they cannot: a clear message and exit 1 instead of an uncaught-exception abort.
+  try {
+    return run_main(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "kestrel: %s: out of memory while setting up or running it; reduce env.num_envs, robot.robots_per_env, "
+                 "env.assets.*.num_assets or the sensor sizes (or lower --max-memory-gib, default %.0f GiB, so set-up refuses "
+                 "it up front)\n",
+                 g_label.c_str(), kDefaultMaxMemoryGiB);
+  } catch (const std::exception& ex) {
+    std::fprintf(stderr, "kestrel: %s: error: %s\n", g_label.c_str(), ex.what());
+  }
+  return 1;
+}
+
+namespace {
+int run_main(int argc, char** argv) {
   if (argc < 2) return usage();
   const std::string cmd = argv[1];
   if (cmd == "list") {
@@ -268,3 +312,4 @@ int main(int argc, char** argv) {
   if (cmd == "run") return run(argc, argv);
   return usage();
 }
+}  // namespace

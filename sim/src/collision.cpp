@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csetjmp>
 
 #include "kestrel/kernel/quaternion.hpp"
 
@@ -238,15 +239,39 @@ Contact capsule_capsule(const Shape& a, const Shape& b) {
 }
 
 // libccd glue: shapes are passed by pointer; libccd is built with double (ccd/config.h).
+//
+// The guard: libccd's MPR (mpr.c) runs its portal discovery and refinement as `while` loops that
+// do not read ccd.max_iterations (only GJK does), and with a hull ~1e22 m long next to a 0.2 m
+// robot they never ended (fuzz F3). Mesh coordinates are now bounded at load (kMaxMeshCoordinateM),
+// and as a second line every MPR call gets a budget of support-function calls: past it the
+// support callback longjmps back to guarded_mpr, which reports "no contact". A normal call needs a
+// few dozen; the budget never binds in the shipped scenarios (the golden hash is unchanged). The
+// jump crosses only libccd's C frames and ccd_support, whose locals are trivially destructible.
+constexpr int kMaxMprSupportCalls = 2000;
+struct MprBudget {
+  int calls = 0;
+  std::jmp_buf exhausted;
+};
+struct MprShape {
+  const Shape* shape;
+  MprBudget* budget;
+};
 void ccd_support(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
-  const Shape& s = *static_cast<const Shape*>(obj);
+  const MprShape& m = *static_cast<const MprShape*>(obj);
+  if (++m.budget->calls > kMaxMprSupportCalls) std::longjmp(m.budget->exhausted, 1);
   const Vec3 d(static_cast<real>(dir->v[0]), static_cast<real>(dir->v[1]), static_cast<real>(dir->v[2]));
-  const Vec3 p = support_point(s, d);
+  const Vec3 p = support_point(*m.shape, d);
   for (int i = 0; i < 3; ++i) out->v[i] = static_cast<ccd_real_t>(p[i]);
 }
 void ccd_center(const void* obj, ccd_vec3_t* out) {
-  const Shape& s = *static_cast<const Shape*>(obj);
+  const Shape& s = *static_cast<const MprShape*>(obj)->shape;
   for (int i = 0; i < 3; ++i) out->v[i] = static_cast<ccd_real_t>(s.position_w[i]);
+}
+// Only pointers live across the setjmp (nothing here is modified after it), so no local can be
+// clobbered by the longjmp. Returns -2 when the budget ran out.
+int guarded_mpr(const MprShape* a, const MprShape* b, const ccd_t* ccd, ccd_real_t* depth, ccd_vec3_t* dir, ccd_vec3_t* pos) {
+  if (setjmp(a->budget->exhausted) != 0) return -2;
+  return ccdMPRPenetration(a, b, ccd, depth, dir, pos);
 }
 
 Contact collide_mpr(const Shape& a, const Shape& b) {
@@ -261,7 +286,9 @@ Contact collide_mpr(const Shape& a, const Shape& b) {
   ccd_real_t depth = 0;
   ccd_vec3_t dir, pos;
   Contact k;
-  if (ccdMPRPenetration(&a, &b, &ccd, &depth, &dir, &pos) != 0) return k;
+  MprBudget budget;
+  const MprShape ma{&a, &budget}, mb{&b, &budget};
+  if (guarded_mpr(&ma, &mb, &ccd, &depth, &dir, &pos) != 0) return k;
   k.hit = true;
   k.depth_m = static_cast<real>(depth);
   // libccd's dir is the direction B must move to separate (from A towards B); ours points into A.

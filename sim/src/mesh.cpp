@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <unordered_map>
+
+#include "kestrel/sim/limits.hpp"
 
 namespace kestrel::sim {
 
@@ -23,25 +27,62 @@ float read_f32(const unsigned char* p) {
   return f;
 }
 
-/// STL triangles are a soup: vertices are shared by exact coordinate equality.
-int vertex_index(TriangleMesh& m, const Vec3& v) {
-  for (std::size_t i = m.vertices.size(); i-- > 0;)
-    if (m.vertices[i] == v) return static_cast<int>(i);
-  m.vertices.push_back(v);
-  return static_cast<int>(m.vertices.size() - 1);
-}
+/// STL triangles are a soup: vertices are shared by exact coordinate equality (operator==: -0 and
+/// +0 are one vertex, a NaN coordinate never matches). A hash map on the coordinate bits replaces
+/// the linear search, which made loading quadratic (fuzz F8: 40k triangles took 9 s). Vertices are
+/// numbered in order of first appearance, as before, so meshes and results are unchanged.
+class VertexWelder {
+ public:
+  explicit VertexWelder(TriangleMesh& m) : m_(m) {}
+  void reserve(std::size_t n) { map_.reserve(n); }
+  int index(const Vec3& v) {
+    if (!(v[0] == v[0] && v[1] == v[1] && v[2] == v[2])) return push(v);  // NaN: equal to nothing
+    const Key k{{v[0], v[1], v[2]}};
+    const auto it = map_.find(k);
+    if (it != map_.end()) return it->second;
+    const int i = push(v);
+    map_.emplace(k, i);
+    return i;
+  }
+
+ private:
+  struct Key {
+    real c[3];
+    bool operator==(const Key& o) const { return c[0] == o.c[0] && c[1] == o.c[1] && c[2] == o.c[2]; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the bits, -0 folded into +0 (they compare equal)
+      for (real c : k.c) {
+        const real z = c == 0 ? real(0) : c;
+        unsigned char b[sizeof(real)];
+        std::memcpy(b, &z, sizeof(real));
+        for (unsigned char x : b) h = (h ^ x) * 1099511628211ull;
+      }
+      return static_cast<std::size_t>(h);
+    }
+  };
+  int push(const Vec3& v) {
+    m_.vertices.push_back(v);
+    return static_cast<int>(m_.vertices.size() - 1);
+  }
+  TriangleMesh& m_;
+  std::unordered_map<Key, int, KeyHash> map_;
+};
 
 bool load_stl(const std::string& path, const std::string& bytes, TriangleMesh& m, std::string& error) {
   if (bytes.size() >= 84) {
     std::uint32_t n = 0;
     std::memcpy(&n, bytes.data() + 80, 4);
     if (bytes.size() == 84 + 50 * static_cast<std::size_t>(n)) {
+      VertexWelder weld(m);
+      weld.reserve(static_cast<std::size_t>(n) * 3);
       const unsigned char* p = reinterpret_cast<const unsigned char*>(bytes.data()) + 84;
       for (std::uint32_t t = 0; t < n; ++t, p += 50) {
         std::array<int, 3> tri{};
         for (int k = 0; k < 3; ++k) {
           const unsigned char* q = p + 12 + 12 * k;  // skip the facet normal
-          tri[k] = vertex_index(m, Vec3(read_f32(q), read_f32(q + 4), read_f32(q + 8)));
+          tri[k] = weld.index(Vec3(read_f32(q), read_f32(q + 4), read_f32(q + 8)));
         }
         m.triangles.push_back(tri);
       }
@@ -49,6 +90,7 @@ bool load_stl(const std::string& path, const std::string& bytes, TriangleMesh& m
     }
   }
   // ASCII: collect `vertex` lines in threes.
+  VertexWelder weld(m);
   std::istringstream in(bytes);
   std::string word;
   std::array<int, 3> tri{};
@@ -57,7 +99,7 @@ bool load_stl(const std::string& path, const std::string& bytes, TriangleMesh& m
     if (word != "vertex") continue;
     double x, y, z;
     if (!(in >> x >> y >> z)) return fail(error, path, "ASCII STL: malformed vertex line");
-    tri[k++] = vertex_index(m, Vec3(static_cast<real>(x), static_cast<real>(y), static_cast<real>(z)));
+    tri[k++] = weld.index(Vec3(static_cast<real>(x), static_cast<real>(y), static_cast<real>(z)));
     if (k == 3) {
       m.triangles.push_back(tri);
       k = 0;
@@ -110,8 +152,19 @@ bool load_mesh(const std::string& path, TriangleMesh& out, std::string& error) {
   TriangleMesh m;
   if (!(ext == ".stl" ? load_stl(path, bytes, m, error) : load_obj(path, bytes, m, error))) return false;
   if (m.triangles.empty()) return fail(error, path, "no triangles");
-  for (const Vec3& v : m.vertices)
-    if (!v.allFinite()) return fail(error, path, "non-finite vertex coordinate");
+  // Bounded, not only finite (fuzz F3): a hull ~5e22 m long made libccd's MPR loop forever, and
+  // coordinates of ~1e9 m overflowed the trajectory plot. |x|, |y|, |z| <= kMaxMeshCoordinateM.
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const Vec3& v = m.vertices[i];
+    for (int k = 0; k < 3; ++k) {
+      if (std::isfinite(v[k]) && std::fabs(static_cast<double>(v[k])) <= kMaxMeshCoordinateM) continue;
+      std::ostringstream s;
+      s << "vertex " << i + 1 << " coordinate " << "xyz"[k] << " = " << static_cast<double>(v[k])
+        << " is out of range; allowed: a finite value with |" << "xyz"[k] << "| <= " << kMaxMeshCoordinateM
+        << " m (kMaxMeshCoordinateM, sim/limits.hpp)";
+      return fail(error, path, s.str());
+    }
+  }
   out = std::move(m);
   return true;
 }

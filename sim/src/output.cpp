@@ -48,27 +48,65 @@ bool write_env_csv(const World& w, const std::string& path, std::string& error) 
 }
 
 namespace {
-struct Canvas {
-  int w, h;
-  std::vector<unsigned char> rgb;
-  Canvas(int width, int height) : w(width), h(height), rgb(static_cast<std::size_t>(width) * height * 3, 255) {}
-  void put(int x, int y, const unsigned char c[3]) {
-    if (x < 0 || y < 0 || x >= w || y >= h) return;
-    for (int k = 0; k < 3; ++k) rgb[(static_cast<std::size_t>(y) * w + x) * 3 + k] = c[k];
-  }
-  void line(int x0, int y0, int x1, int y1, const unsigned char c[3]) {
-    const int dx = std::abs(x1 - x0), sx = x0 < x1 ? 1 : -1, dy = -std::abs(y1 - y0), sy = y0 < y1 ? 1 : -1;
-    int err = dx + dy;
-    for (;;) {
-      put(x0, y0, c);
-      if (x0 == x1 && y0 == y1) break;
-      const int e2 = 2 * err;
-      if (e2 >= dy) { err += dy; x0 += sx; }
-      if (e2 <= dx) { err += dx; y0 += sy; }
+/// Liang-Barsky: clips the segment to [xmin, xmax] x [ymin, ymax] in place. False: nothing of it
+/// is inside (or a coordinate is not finite). An endpoint inside the box is left exactly as given.
+/// A moved endpoint lies on the edge that clipped it (set exactly: with endpoints ~1e40 px away,
+/// x0 + t dx has an absolute rounding error far above a pixel) and is clamped into the box.
+bool clip_segment(double& x0, double& y0, double& x1, double& y1, double xmin, double xmax, double ymin, double ymax) {
+  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1)) return false;
+  const double dx = x1 - x0, dy = y1 - y0;
+  if (!std::isfinite(dx) || !std::isfinite(dy)) return false;
+  double t0 = 0, t1 = 1;
+  int e0 = -1, e1 = -1;  // the edge (0 xmin, 1 xmax, 2 ymin, 3 ymax) that set t0 / t1
+  auto edge = [&](int id, double p, double q) {  // keeps the part with p t <= q
+    if (p == 0) return q >= 0;
+    const double r = q / p;
+    if (p < 0) {
+      if (r > t1) return false;
+      if (r > t0) t0 = r, e0 = id;
+    } else {
+      if (r < t0) return false;
+      if (r < t1) t1 = r, e1 = id;
     }
-  }
-};
+    return true;
+  };
+  if (!edge(0, -dx, x0 - xmin) || !edge(1, dx, xmax - x0) || !edge(2, -dy, y0 - ymin) || !edge(3, dy, ymax - y0)) return false;
+  const double ox = x0, oy = y0;
+  const double edges[4] = {xmin, xmax, ymin, ymax};
+  auto place = [&](int id, double t, double& x, double& y) {
+    x = std::min(xmax, std::max(xmin, ox + t * dx));
+    y = std::min(ymax, std::max(ymin, oy + t * dy));
+    (id < 2 ? x : y) = edges[id];
+  };
+  if (e1 >= 0) place(e1, t1, x1, y1);
+  if (e0 >= 0) place(e0, t0, x0, y0);
+  return true;
+}
 }  // namespace
+
+std::size_t draw_line_rgb(unsigned char* rgb, int W, int H, double x0, double y0, double x1, double y1, const unsigned char c[3]) {
+  // Clipped in floating point to a 2-pixel border around the canvas before anything becomes an
+  // int (fuzz F2: obstacles ~1e9 m away gave pixel coordinates beyond int, overflow in the
+  // Bresenham error terms and a crash). What is drawn inside the canvas is unchanged: segments
+  // within the border are not touched, and the rest of a long one lies off the canvas.
+  if (!clip_segment(x0, y0, x1, y1, -2.0, W + 1.0, -2.0, H + 1.0)) return 0;
+  int ix0 = static_cast<int>(std::lround(x0)), iy0 = static_cast<int>(std::lround(y0));
+  const int ix1 = static_cast<int>(std::lround(x1)), iy1 = static_cast<int>(std::lround(y1));
+  const int dx = std::abs(ix1 - ix0), sx = ix0 < ix1 ? 1 : -1, dy = -std::abs(iy1 - iy0), sy = iy0 < iy1 ? 1 : -1;
+  int err = dx + dy;
+  std::size_t drawn = 0;
+  for (;;) {
+    if (ix0 >= 0 && iy0 >= 0 && ix0 < W && iy0 < H) {
+      for (int k = 0; k < 3; ++k) rgb[(static_cast<std::size_t>(iy0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(ix0)) * 3 + k] = c[k];
+      ++drawn;
+    }
+    if (ix0 == ix1 && iy0 == iy1) break;
+    const int e2 = 2 * err;
+    if (e2 >= dy) { err += dy; ix0 += sx; }
+    if (e2 <= dx) { err += dx; iy0 += sy; }
+  }
+  return drawn;
+}
 
 bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
@@ -97,25 +135,31 @@ bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* r
 
 bool write_trajectory_png(const World& world, const std::string& path, std::string& error) {
   const int W = 640, H = 480, M = 20;
-  Canvas cv(W, H);
+  std::vector<unsigned char> rgb(static_cast<std::size_t>(W) * H * 3, 255);
   Vec3 lo, hi;
   world.lower_upper_bounds(0, lo, hi);
   const double sx = (W - 2 * M) / static_cast<double>(hi[0] - lo[0]), sy = (H - 2 * M) / static_cast<double>(hi[1] - lo[1]);
   const double s = std::min(sx, sy);
-  auto px = [&](real x) { return M + static_cast<int>(std::lround((x - lo[0]) * s)); };
-  auto py = [&](real y) { return H - M - static_cast<int>(std::lround((y - lo[1]) * s)); };
+  // Metres -> pixels, kept in double (a far coordinate must not be converted to int: draw_line_rgb
+  // clips first). Within +-1e9 pixels the value is rounded here as before (the same pixels).
+  auto snap = [](double v) { return std::fabs(v) <= 1e9 ? static_cast<double>(std::lround(v)) : v; };
+  auto px = [&](real x) { return M + snap(static_cast<double>(x - lo[0]) * s); };
+  auto py = [&](real y) { return H - M - snap(static_cast<double>(y - lo[1]) * s); };
+  auto line = [&](double x0, double y0, double x1, double y1, const unsigned char c[3]) {
+    (void)draw_line_rgb(rgb.data(), W, H, x0, y0, x1, y1, c);
+  };
   const unsigned char grey[3] = {160, 160, 160}, black[3] = {0, 0, 0};
-  cv.line(px(lo[0]), py(lo[1]), px(hi[0]), py(lo[1]), black);
-  cv.line(px(hi[0]), py(lo[1]), px(hi[0]), py(hi[1]), black);
-  cv.line(px(hi[0]), py(hi[1]), px(lo[0]), py(hi[1]), black);
-  cv.line(px(lo[0]), py(hi[1]), px(lo[0]), py(lo[1]), black);
+  line(px(lo[0]), py(lo[1]), px(hi[0]), py(lo[1]), black);
+  line(px(hi[0]), py(lo[1]), px(hi[0]), py(hi[1]), black);
+  line(px(hi[0]), py(hi[1]), px(lo[0]), py(hi[1]), black);
+  line(px(lo[0]), py(hi[1]), px(lo[0]), py(lo[1]), black);
   for (int i = 0; i < world.num_obstacles(0); ++i) {
     const Obstacle& o = world.obstacle(0, i);
-    const int x0 = px(o.aabb_min_w[0]), x1 = px(o.aabb_max_w[0]), y0 = py(o.aabb_min_w[1]), y1 = py(o.aabb_max_w[1]);
-    cv.line(x0, y0, x1, y0, grey);
-    cv.line(x1, y0, x1, y1, grey);
-    cv.line(x1, y1, x0, y1, grey);
-    cv.line(x0, y1, x0, y0, grey);
+    const double x0 = px(o.aabb_min_w[0]), x1 = px(o.aabb_max_w[0]), y0 = py(o.aabb_min_w[1]), y1 = py(o.aabb_max_w[1]);
+    line(x0, y0, x1, y0, grey);
+    line(x1, y0, x1, y1, grey);
+    line(x1, y1, x0, y1, grey);
+    line(x0, y1, x0, y0, grey);
   }
   const unsigned char palette[6][3] = {{220, 30, 30}, {30, 120, 220}, {30, 170, 60}, {200, 120, 0}, {140, 40, 180}, {0, 160, 160}};
   for (int e = 0; e < world.trace_envs(); ++e)
@@ -123,9 +167,9 @@ bool write_trajectory_png(const World& world, const std::string& path, std::stri
       const Vec3& a = world.trace_point(e, k - 1);
       const Vec3& b = world.trace_point(e, k);
       if ((a - b).norm() > 1) continue;  // a reset: do not draw the jump back to the start
-      cv.line(px(a[0]), py(a[1]), px(b[0]), py(b[1]), palette[e % 6]);
+      line(px(a[0]), py(a[1]), px(b[0]), py(b[1]), palette[e % 6]);
     }
-  return write_png_rgb(path, W, H, cv.rgb.data(), error);
+  return write_png_rgb(path, W, H, rgb.data(), error);
 }
 
 bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,

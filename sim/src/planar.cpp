@@ -51,6 +51,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <cstdio>
 
 #include "kestrel/allocation/allocation_model.hpp"
 #include "kestrel/allocation/presets.hpp"
@@ -234,6 +235,28 @@ class PlanarSimulator final : public Simulator {
       return bad("simulator: randomisation ranges need min <= max, scales > 0, com_bias_max_m >= 0 and a positive total mass");
     if (sc.lidar_beams < 0 || sc.lidar_beams > 4096 || !(sc.lidar_max_range_m > 0) || !(sc.lidar_fov_rad > 0 && sc.lidar_fov_rad <= kTwoPi))
       return bad("simulator.lidar_*: expected 0..4096 beams, a positive range and a field of view in (0, 2 pi]");
+    // Upper bounds of every count (sim/limits.hpp) and the memory estimate, before allocating.
+    {
+      std::string lerr;
+      if (!check_config_limits(c, lerr)) return bad(lerr);
+      long long slots = 0;
+      for (const AssetClass& a : e.assets) slots += asset_class_slots(a);
+      // Per environment: the step arena, ~1 KiB of Box2D body and fixture per obstacle and robot
+      // (generous), per robot the controller/allocator/motor state, the views and the lidar.
+      const double per_robot = sizeof(ControllerState) + sizeof(VelocitySteeringState) + sizeof(al::AllocatorState) +
+                               sizeof(al::MotorModelState) + 1024.0 + 64.0 * sizeof(real) + 4.0 * sc.lidar_beams;
+      const double per_env = static_cast<double>(kStepArenaBytes) + 1024.0 * static_cast<double>(slots) +
+                             per_robot * c.robot.robots_per_env;
+      const double need = per_env * e.num_envs, gib = 1024.0 * 1024.0 * 1024.0;
+      if (need > c.max_memory_gib * gib) {
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "memory: this world needs about %.3g GiB (%d envs), more than max_memory_gib = %.4g GiB; allowed: up to "
+                      "max_memory_gib (scenario `max_memory_gib` or kestrel run --max-memory-gib); reduce env.num_envs or the counts",
+                      need / gib, e.num_envs, c.max_memory_gib);
+        return bad(buf);
+      }
+    }
     if (e.terrain.type == TerrainType::heightfield)
       return bad("env.terrain: a height field is 3-D ground the plane cannot represent; use simulator: rigid");
     if (e.terrain.type == TerrainType::trimesh)

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/task.hpp"
 #include "kestrel/sim/terrain.hpp"
@@ -32,6 +33,14 @@ int get_int(const YAML::Node& n, const std::string& f, int min_value) {
   if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || v < min_value)
     bad(f, (min_value == 1 ? std::string("expected a positive integer") : "expected an integer >= " + std::to_string(min_value)) +
                ", got \"" + scalar_text(n) + "\"");
+  return v;
+}
+/// A count with an upper bound (sim/limits.hpp): `max_name` names the constant in the message.
+int get_int(const YAML::Node& n, const std::string& f, int min_value, int max_value, const char* max_name) {
+  int v = 0;
+  if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || v < min_value || v > max_value)
+    bad(f, "expected an integer in [" + std::to_string(min_value) + ", " + std::to_string(max_value) + "] (" + max_name +
+               "), got \"" + scalar_text(n) + "\"");
   return v;
 }
 real get_real(const YAML::Node& n, const std::string& f, double lo, double hi) {
@@ -124,7 +133,7 @@ void parse_sim(const YAML::Node& n, SimParams& s) {
                         "friction_coefficient"});
   if (!n.IsMap()) return;
   if (n["dt_s"]) s.dt_s = get_real(n["dt_s"], "sim.dt_s", 1e-6, 1);
-  if (n["substeps"]) s.substeps = get_int(n["substeps"], "sim.substeps", 1);
+  if (n["substeps"]) s.substeps = get_int(n["substeps"], "sim.substeps", 1, kMaxSubsteps, "kMaxSubsteps");
   if (n["gravity_w"]) s.gravity_w = get_vec3(n["gravity_w"], "sim.gravity_w");
   if (n["integrator"]) {
     const std::string v = n["integrator"].Scalar();
@@ -197,7 +206,7 @@ void parse_terrain(const YAML::Node& n, TerrainConfig& t, const std::string& dir
   if (n["max_height_m"]) t.max_height_m = get_real(n["max_height_m"], f + ".max_height_m", -1e3, 1e3);
   if (n["height_step_m"]) t.height_step_m = get_real(n["height_step_m"], f + ".height_step_m", 1e-6, 1e3);
   if (n["downsampled_scale_m"]) t.downsampled_scale_m = get_real(n["downsampled_scale_m"], f + ".downsampled_scale_m", 1e-4, 1e4);
-  if (n["num_waves"]) t.num_waves = get_int(n["num_waves"], f + ".num_waves", 1);
+  if (n["num_waves"]) t.num_waves = get_int(n["num_waves"], f + ".num_waves", 1, kMaxNumWaves, "kMaxNumWaves");
   if (n["amplitude_m"]) t.amplitude_m = get_real(n["amplitude_m"], f + ".amplitude_m", -100, 100);
   if (n["measure_heights"]) t.measure_heights = get_bool(n["measure_heights"], f + ".measure_heights");
   if (n["measured_points_x"]) t.measured_points_x_m = get_real_list(n["measured_points_x"], f + ".measured_points_x");
@@ -237,7 +246,7 @@ void parse_assets(const YAML::Node& n, EnvConfig& e, const std::string& dir) {
         found = true;
       }
     if (!found) bad(f + ".kind", "expected one of tree, panel, cube, rod, small_wall, wall, thin, sphere, mesh, got \"" + k + "\"");
-    if (a["num_assets"]) c.num_assets = get_int(a["num_assets"], f + ".num_assets", 0);
+    if (a["num_assets"]) c.num_assets = get_int(a["num_assets"], f + ".num_assets", 0, kMaxAssetsPerClass, "kMaxAssetsPerClass");
     c.min_num_assets = a["min_num_assets"] ? get_int(a["min_num_assets"], f + ".min_num_assets", 0) : c.num_assets;
     if (c.min_num_assets > c.num_assets) bad(f + ".min_num_assets", "expected <= num_assets");
     if (a["min_position_ratio"]) c.min_position_ratio = get_vec3(a["min_position_ratio"], f + ".min_position_ratio");
@@ -247,7 +256,7 @@ void parse_assets(const YAML::Node& n, EnvConfig& e, const std::string& dir) {
     if (a["min_size_m"]) c.min_size_m = get_vec3(a["min_size_m"], f + ".min_size_m");
     if (a["max_size_m"]) c.max_size_m = get_vec3(a["max_size_m"], f + ".max_size_m");
     if (a["keep_in_env"]) c.keep_in_env = get_bool(a["keep_in_env"], f + ".keep_in_env");
-    if (a["semantic_id"]) c.semantic_id = get_int(a["semantic_id"], f + ".semantic_id", 0);
+    if (a["semantic_id"]) c.semantic_id = get_int(a["semantic_id"], f + ".semantic_id", 0, kMaxAssetSemanticId, "kMaxAssetSemanticId");
     if (a["max_speed_m_s"]) c.max_speed_m_s = get_real(a["max_speed_m_s"], f + ".max_speed_m_s", 0, 1000);
     if (a["max_angular_speed_rad_s"]) c.max_angular_speed_rad_s = get_real(a["max_angular_speed_rad_s"], f + ".max_angular_speed_rad_s", 0, 1000);
     if (a["mesh_file"]) c.mesh_file = resolve_path(dir, a["mesh_file"].Scalar());
@@ -267,11 +276,13 @@ void parse_env(const YAML::Node& n, EnvConfig& e, const std::string& dir, const 
                         "enable_disturbance", "prob_apply_disturbance", "curriculum_level", "include_asset_type", "assets",
                         "terrain"});
   if (!n.IsMap()) return;
-  if (n["num_envs"]) e.num_envs = get_int(n["num_envs"], "env.num_envs", 1);
+  if (n["num_envs"]) e.num_envs = get_int(n["num_envs"], "env.num_envs", 1, kMaxNumEnvs, "kMaxNumEnvs");
   if (n["num_physics_steps_per_env_step_mean"])
-    e.num_physics_steps_per_env_step_mean = get_real(n["num_physics_steps_per_env_step_mean"], "env.num_physics_steps_per_env_step_mean", 1, 1000);
+    e.num_physics_steps_per_env_step_mean = get_real(n["num_physics_steps_per_env_step_mean"], "env.num_physics_steps_per_env_step_mean", 1,
+                                                     kMaxPhysicsStepsPerEnvStep);
   if (n["num_physics_steps_per_env_step_std"])
-    e.num_physics_steps_per_env_step_std = get_real(n["num_physics_steps_per_env_step_std"], "env.num_physics_steps_per_env_step_std", 0, 1000);
+    e.num_physics_steps_per_env_step_std = get_real(n["num_physics_steps_per_env_step_std"], "env.num_physics_steps_per_env_step_std", 0,
+                                                    kMaxPhysicsStepsPerEnvStep);
   if (n["lower_bound_min"]) e.lower_bound_min_m = get_vec3(n["lower_bound_min"], "env.lower_bound_min");
   if (n["lower_bound_max"]) e.lower_bound_max_m = get_vec3(n["lower_bound_max"], "env.lower_bound_max");
   if (n["upper_bound_min"]) e.upper_bound_min_m = get_vec3(n["upper_bound_min"], "env.upper_bound_min");
@@ -281,7 +292,9 @@ void parse_env(const YAML::Node& n, EnvConfig& e, const std::string& dir, const 
   if (n["create_ground_plane"]) e.create_ground_plane = get_bool(n["create_ground_plane"], "env.create_ground_plane");
   if (n["keep_same_env_for_num_episodes"]) e.keep_same_env_for_num_episodes = get_int(n["keep_same_env_for_num_episodes"], "env.keep_same_env_for_num_episodes", 1);
   if (n["sample_timestep_for_latency"]) e.sample_timestep_for_latency = get_bool(n["sample_timestep_for_latency"], "env.sample_timestep_for_latency");
-  if (n["max_latency_physics_steps"]) e.max_latency_physics_steps = get_int(n["max_latency_physics_steps"], "env.max_latency_physics_steps", 0);
+  if (n["max_latency_physics_steps"])
+    e.max_latency_physics_steps = get_int(n["max_latency_physics_steps"], "env.max_latency_physics_steps", 0, kMaxLatencyPhysicsSteps,
+                                          "kMaxLatencyPhysicsSteps");
   if (n["perturb_observations"]) e.perturb_observations = get_bool(n["perturb_observations"], "env.perturb_observations");
   if (n["enable_disturbance"]) e.enable_disturbance = get_bool(n["enable_disturbance"], "env.enable_disturbance");
   if (n["prob_apply_disturbance"]) e.prob_apply_disturbance = get_real(n["prob_apply_disturbance"], "env.prob_apply_disturbance", 0, 1);
@@ -317,7 +330,7 @@ void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& whe
     std::string err;
     if (!apply_urdf(resolve_path(dir, n["urdf"].Scalar()), r, err)) bad(where + ".urdf", err);
   }
-  if (n["robots_per_env"]) r.robots_per_env = get_int(n["robots_per_env"], where + ".robots_per_env", 1);
+  if (n["robots_per_env"]) r.robots_per_env = get_int(n["robots_per_env"], where + ".robots_per_env", 1, kMaxRobotsPerEnv, "kMaxRobotsPerEnv");
   if (n["mass_kg"]) r.mass_kg = get_real(n["mass_kg"], where + ".mass_kg", 1e-6, 1e6);
   if (n["inertia_diag_kg_m2"]) r.inertia_diag_kg_m2 = get_vec3(n["inertia_diag_kg_m2"], where + ".inertia_diag_kg_m2");
   if (n["use_desaturation"]) r.use_desaturation = get_bool(n["use_desaturation"], where + ".use_desaturation");
@@ -373,7 +386,7 @@ void parse_robot(const YAML::Node& n, RobotConfig& r, const std::string& dir) {
 
 WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::string& source) {
   if (!root.IsMap()) bad("(top level)", "expected a map with sim, env, robot, controller, task, sensors, seed");
-  check_keys(root, "(top level)", {"sim", "env", "robot", "controller", "task", "sensors", "seed", "threads", "simulator"});
+  check_keys(root, "(top level)", {"sim", "env", "robot", "controller", "task", "sensors", "seed", "threads", "simulator", "max_memory_gib"});
   WorldConfig c;
   // An RL task (sim/task.hpp) brings its own scene: the sections the file leaves out default to
   // the task's sim, env, robot, controller and sensors instead of the harness defaults.
@@ -414,13 +427,17 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::str
       if (!s[i].IsScalar() && !s[i].IsMap()) bad(field, "expected a sensor name or a map with `name`");
       SensorConfig sc = lookup(registries().sensors, section_name(s[i], field), "sensors");
       check_keys(s[i], field, {"every"});
-      if (s[i].IsMap() && s[i]["every"]) sc.every_env_steps = get_int(s[i]["every"], field + ".every", 1);
+      if (s[i].IsMap() && s[i]["every"])
+        sc.every_env_steps = get_int(s[i]["every"], field + ".every", 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps");
       c.robot.sensors.push_back(sc);
     }
   }
   if (root["simulator"]) parse_simulator(root["simulator"], c.simulator);
   if (root["seed"]) c.seed = static_cast<std::uint64_t>(get_int(root["seed"], "seed", 0));
-  if (root["threads"]) c.num_threads = get_int(root["threads"], "threads", 1);
+  if (root["threads"]) c.num_threads = get_int(root["threads"], "threads", 1, kMaxThreads, "kMaxThreads");
+  if (root["max_memory_gib"]) c.max_memory_gib = get_real(root["max_memory_gib"], "max_memory_gib", 1e-6, kMaxMemoryGiBSetting);
+  // The bounds that span fields (obstacle slots summed over the classes, measured points x * y).
+  if (std::string lerr; !check_config_limits(c, lerr)) throw ScenarioError(lerr);
   return c;
 }
 

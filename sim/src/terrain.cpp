@@ -6,16 +6,25 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/mesh.hpp"
 
 namespace kestrel::sim {
 
 namespace {
+
+/// The pixel-count refusal of both loaders (checked from the header, before any allocation).
+std::string too_many_samples(const std::string& path, long long w, long long h) {
+  return "\"" + path + "\": " + std::to_string(w) + " x " + std::to_string(h) + " = " + std::to_string(w * h) +
+         " samples; allowed: width, height >= 2 and width x height <= " + std::to_string(kMaxHeightmapSamples) +
+         " (kMaxHeightmapSamples, sim/limits.hpp)";
+}
 
 std::string where(const TerrainConfig& c, const std::string& field) {
   return (c.source_file.empty() ? std::string() : c.source_file + ": ") + "env.terrain." + field + ": ";
@@ -51,14 +60,30 @@ bool read_pgm(const std::string& path, int& w, int& h, std::vector<double>& px, 
     msg = "\"" + path + "\" is not a PGM graymap (expected a P5 or P2 header)";
     return false;
   }
-  w = std::atoi(sw.c_str());
-  h = std::atoi(sh.c_str());
-  const int maxval = std::atoi(smax.c_str());
-  if (w < 2 || h < 2 || maxval < 1 || maxval > 65535) {
+  // strtoll, not atoi: an out-of-int value must be refused, not wrapped. Everything about the
+  // header is checked before the pixel buffer is allocated (fuzz F4: a 19-byte file asked for 17 GB).
+  const long long lw = std::strtoll(sw.c_str(), nullptr, 10), lh = std::strtoll(sh.c_str(), nullptr, 10);
+  const long long maxval = std::strtoll(smax.c_str(), nullptr, 10);
+  if (lw < 2 || lh < 2 || maxval < 1 || maxval > 65535) {
     msg = "\"" + path + "\": expected width and height >= 2 and 1 <= maxval <= 65535";
     return false;
   }
+  if (lw > kMaxHeightmapSamples || lh > kMaxHeightmapSamples || lw * lh > kMaxHeightmapSamples) {
+    msg = too_many_samples(path, lw, lh);
+    return false;
+  }
+  w = static_cast<int>(lw);
+  h = static_cast<int>(lh);
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  const std::size_t left = bytes.size() > pos ? bytes.size() - pos : 0;
+  // P2: every sample is at least one digit, and all but the last are followed by whitespace.
+  // P5: exactly n samples of 1 or 2 bytes after the single whitespace that ends the header.
+  const std::size_t need = magic == "P2" ? 2 * n - 1 : 1 + n * (maxval > 255 ? 2 : 1);
+  if (left < need) {
+    msg = "\"" + path + "\": truncated pixel data (" + std::to_string(w) + " x " + std::to_string(h) + " samples need at least " +
+          std::to_string(need) + " bytes after the header, the file has " + std::to_string(left) + ")";
+    return false;
+  }
   px.assign(n, 0);
   if (magic == "P2") {
     std::string t;
@@ -90,6 +115,10 @@ bool read_png(const std::string& path, int& w, int& h, std::vector<double>& px, 
     msg = "cannot open \"" + path + "\"";
     return false;
   }
+  // The file size bounds what its image data can hold: deflate expands at most ~1032:1.
+  std::fseek(fp, 0, SEEK_END);
+  const long file_bytes = std::ftell(fp);
+  std::fseek(fp, 0, SEEK_SET);
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   std::vector<unsigned char> data;
@@ -99,12 +128,24 @@ bool read_png(const std::string& path, int& w, int& h, std::vector<double>& px, 
     png_init_io(png, fp);
     png_read_info(png, info);
     const int ct = png_get_color_type(png, info), depth = png_get_bit_depth(png, info);
-    w = static_cast<int>(png_get_image_width(png, info));
-    h = static_cast<int>(png_get_image_height(png, info));
+    // libpng accepts up to 1e6 x 1e6 (fuzz F4: a 68-byte file asked for 1 TB): the sample count
+    // and the data the file can hold are checked from the header, before allocating.
+    const long long lw = static_cast<long long>(png_get_image_width(png, info));
+    const long long lh = static_cast<long long>(png_get_image_height(png, info));
+    const long long channels = (ct & PNG_COLOR_MASK_ALPHA) != 0 ? 2 : 1;
+    const long long raw_bytes = lh * (1 + (lw * depth * channels + 7) / 8);  // a filter byte per row
+    w = static_cast<int>(std::min<long long>(lw, 1 << 30));
+    h = static_cast<int>(std::min<long long>(lh, 1 << 30));
     if ((ct & PNG_COLOR_MASK_COLOR) != 0 || (ct & PNG_COLOR_MASK_PALETTE) != 0) {
       msg = "\"" + path + "\": expected a grayscale PNG (colour type " + std::to_string(ct) + ")";
-    } else if (w < 2 || h < 2) {
+    } else if (lw < 2 || lh < 2) {
       msg = "\"" + path + "\": expected width and height >= 2";
+    } else if (lw * lh > kMaxHeightmapSamples) {
+      msg = too_many_samples(path, lw, lh);
+    } else if (static_cast<double>(raw_bytes) > 1032.0 * static_cast<double>(file_bytes) + 1024.0) {
+      msg = "\"" + path + "\": truncated image data (" + std::to_string(lw) + " x " + std::to_string(lh) + " at " +
+            std::to_string(depth) + " bits is " + std::to_string(raw_bytes) + " bytes, more than a " + std::to_string(file_bytes) +
+            "-byte file can hold)";
     } else {
       if (depth < 8) png_set_expand_gray_1_2_4_to_8(png);
       if ((ct & PNG_COLOR_MASK_ALPHA) != 0) png_set_strip_alpha(png);
@@ -278,7 +319,9 @@ bool Terrain::build_heightfield(const TerrainConfig& c, std::uint64_t seed, std:
     if (!(c.length_x_m >= hs) || !(c.width_y_m >= hs)) return fail("length_x_m", "expected length_x_m and width_y_m >= horizontal_scale_m");
     nx = static_cast<int>(std::floor(c.length_x_m / hs + 0.5_r)) + 1;
     ny = static_cast<int>(std::floor(c.width_y_m / hs + 0.5_r)) + 1;
-    if (static_cast<long long>(nx) * ny > 64ll * 1024 * 1024) return fail("length_x_m", "grid larger than 64 M samples");
+    if (static_cast<long long>(nx) * ny > kMaxHeightmapSamples)
+      return fail("length_x_m", "grid of " + std::to_string(static_cast<long long>(nx) * ny) + " samples; allowed: at most " +
+                                    std::to_string(kMaxHeightmapSamples) + " (kMaxHeightmapSamples, sim/limits.hpp)");
     const real lx = static_cast<real>(nx - 1) * hs, ly = static_cast<real>(ny - 1) * hs;
     h.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
     auto at = [&](int i, int j) -> real& { return h[static_cast<std::size_t>(j) * nx + i]; };

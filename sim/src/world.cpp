@@ -14,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/sim/mesh.hpp"
@@ -51,9 +53,50 @@ void sort_sweep_order(Obstacle* o, int n) {
 }  // namespace
 
 int asset_class_slots(const AssetClass& c) {
-  if (c.kind == AssetKind::tree) return c.num_assets * (1 + kTreeBranches);
   if (c.kind == AssetKind::wall) return 5;  // four side walls and a ceiling around the bounds
-  return c.num_assets;
+  // In 64 bits and saturated: a tree class of 6e8 assets overflowed int here (fuzz F5), giving a
+  // negative capacity. check_config_limits bounds num_assets long before this matters.
+  const long long n = static_cast<long long>(c.num_assets) * (c.kind == AssetKind::tree ? 1 + kTreeBranches : 1);
+  return static_cast<int>(std::min<long long>(n, std::numeric_limits<int>::max()));
+}
+
+namespace {
+/// Bytes one environment's storage takes (World::bytes_per_env, and the estimate made before
+/// anything is allocated: both are computed here so they cannot drift apart).
+std::size_t env_bytes(const WorldConfig& cfg, int obstacle_capacity, int height_points) {
+  const std::size_t per_robot = sizeof(RigidBodyState) + sizeof(ControllerState) + sizeof(al::AllocatorState) +
+                                sizeof(al::MotorModelState) + 2 * kMaxActionDim * sizeof(real) + 3 * sizeof(Vec3) + 1;
+  const std::size_t per_env = 2 * sizeof(RngStream) + 2 * sizeof(Vec3) + 6 * sizeof(int) + sizeof(std::uint32_t) +
+                              sizeof(EnvStats) + static_cast<std::size_t>(obstacle_capacity) * sizeof(Obstacle);
+  std::size_t sensor_per_robot = 0;
+  bool any_ray = false;
+  for (const SensorConfig& c : cfg.robot.sensors) {
+    if (c.kind == SensorKind::imu) {
+      sensor_per_robot += sizeof(sensors::ImuState) + sizeof(sensors::ImuSample);
+      continue;
+    }
+    any_ray = true;
+    const bool cam = c.kind == SensorKind::camera;
+    const std::size_t pixels = static_cast<std::size_t>(cam ? c.camera.height : c.lidar.height) * (cam ? c.camera.width : c.lidar.width);
+    sensor_per_robot += pixels * (sizeof(real) + sizeof(std::int32_t)) + sizeof(sensors::Mount);
+  }
+  const std::uint32_t scene_capacity = static_cast<std::uint32_t>(obstacle_capacity) + 1;
+  const std::size_t scene = any_ray ? sizeof(sensors::Scene) + static_cast<std::size_t>(scene_capacity) *
+                                          (sizeof(sensors::SceneObject) + 2 * sizeof(std::uint32_t) + sizeof(sensors::Aabb)) +
+                                          sensors::bvh_node_capacity(scene_capacity) * sizeof(sensors::BvhNode)
+                                    : 0;
+  sensor_per_robot += static_cast<std::size_t>(height_points) * sizeof(real);  // measured_heights
+  return per_env + scene + (per_robot + sensor_per_robot) * static_cast<std::size_t>(cfg.robot.robots_per_env);
+}
+}  // namespace
+
+double World::estimate_bytes(const WorldConfig& config) {
+  int cap = 0;
+  for (const AssetClass& c : config.env.assets) cap += asset_class_slots(c);
+  const TerrainConfig& t = config.env.terrain;
+  const int points = t.measure_heights ? static_cast<int>(t.measured_points_x_m.size() * t.measured_points_y_m.size()) : 0;
+  // In double: the product of a bad config's counts must not wrap before it is compared.
+  return static_cast<double>(env_bytes(config, cap, points)) * static_cast<double>(config.env.num_envs);
 }
 
 std::unique_ptr<World> World::create(const WorldConfig& config, std::string& error) {
@@ -86,6 +129,22 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
     return fail("task.placement_attempts: expected an integer in [1, " + std::to_string(kMaxPlacementAttempts) + "]");
   if (!(config.task.clearance_m >= 0)) return fail("task.clearance_m: expected a number >= 0");
   if (!(config.task.setpoint_speed_m_s >= 0)) return fail("task.setpoint_speed_m_s: expected a number >= 0");
+  // Upper bounds of every count (sim/limits.hpp), then the memory the world will need, before
+  // any of it is allocated: a bad count is a message naming the field, not std::bad_alloc.
+  {
+    std::string lerr;
+    if (!check_config_limits(config, lerr)) return fail(lerr);
+    const double need = estimate_bytes(config), gib = 1024.0 * 1024.0 * 1024.0;
+    if (need > config.max_memory_gib * gib) {
+      char buf[512];
+      std::snprintf(buf, sizeof buf,
+                    "memory: this world needs about %.3g GiB (%d envs x %.4g MiB each: robots_per_env, obstacle slots, "
+                    "sensors), more than max_memory_gib = %.4g GiB; allowed: up to max_memory_gib (scenario "
+                    "`max_memory_gib` or kestrel run --max-memory-gib, (0, %.0f]); reduce env.num_envs or the counts",
+                    need / gib, e.num_envs, need / e.num_envs / (1024.0 * 1024.0), config.max_memory_gib, kMaxMemoryGiBSetting);
+      return fail(buf);
+    }
+  }
 
   std::unique_ptr<World> w(new World());
   w->cfg_ = config;
@@ -998,21 +1057,6 @@ const sensors::Mount& World::sensor_mount(int env, int sensor, int robot) const 
   return s.kind == SensorKind::imu ? kIdentity : s.mounts[index(env, robot)];
 }
 
-std::size_t World::bytes_per_env() const {
-  const std::size_t per_robot = sizeof(RigidBodyState) + sizeof(ControllerState) + sizeof(al::AllocatorState) +
-                                sizeof(al::MotorModelState) + 2 * kMaxActionDim * sizeof(real) + 3 * sizeof(Vec3) + 1;
-  const std::size_t per_env = 2 * sizeof(RngStream) + 2 * sizeof(Vec3) + 6 * sizeof(int) + sizeof(std::uint32_t) +
-                              sizeof(EnvStats) + static_cast<std::size_t>(obstacle_capacity_) * sizeof(Obstacle);
-  std::size_t sensor_per_robot = 0;
-  for (const SensorSlot& sl : sensors_)
-    sensor_per_robot += sl.kind == SensorKind::imu ? sizeof(sensors::ImuState) + sizeof(sensors::ImuSample)
-                                                   : sl.pixels * (sizeof(real) + sizeof(std::int32_t)) + sizeof(sensors::Mount);
-  const std::size_t scene = any_ray_sensor_ ? sizeof(sensors::Scene) + static_cast<std::size_t>(scene_capacity_) *
-                                                  (sizeof(sensors::SceneObject) + 2 * sizeof(std::uint32_t) + sizeof(sensors::Aabb)) +
-                                                  sensors::bvh_node_capacity(scene_capacity_) * sizeof(sensors::BvhNode)
-                                            : 0;
-  sensor_per_robot += static_cast<std::size_t>(height_points_) * sizeof(real);  // measured_heights
-  return per_env + scene + (per_robot + sensor_per_robot) * static_cast<std::size_t>(robots_per_env_);
-}
+std::size_t World::bytes_per_env() const { return env_bytes(cfg_, obstacle_capacity_, height_points_); }
 
 }  // namespace kestrel::sim

@@ -142,6 +142,72 @@ KTEST(Alloc, NonFiniteCommandHoldsLastOutputWithoutNaN) {
   }
 }
 
+// Fuzz finding F1: a finite command near the float limit (what the Lee controller makes of a
+// 3.4e38 rad/s body rate, or of a 1e37 gain) overflowed A+ w to +-inf, the desaturation turned
+// inf - inf into NaN and clamp() let it through: NaN thrusts with Status::ok, and NaN stored as the
+// held output. Now: never NaN; an overflowed solution holds the last finite thrust with
+// Status::non_finite_output and kFaultNonFiniteOutput, and the next sane command recovers.
+KTEST(Alloc, OverflowingFiniteCommandHoldsLastFiniteOutput) {
+  const AirframeSpec* specs[2] = {&kBaseQuadrotor, &kHexarotor};  // unrolled 4-rotor path and run-time count
+  const Which all[3] = {Which::pinv, Which::desat, Which::cls};
+  const real big[4] = {3.4e38_r, -3.4e38_r, 1e38_r, -5e37_r};
+  for (const AirframeSpec* spec : specs) {
+    const Status bst = build_preset(*spec, g_airframe, g_model);
+    KASSERT_TRUE(bst == Status::ok || bst == Status::singular);
+    const int n = spec->num_rotors;
+    for (Which which : all) {
+      int held = 0;
+      for (int mode = 0; mode < 3; ++mode) {
+        if (which != Which::desat && mode > 0) continue;
+        SequentialDesaturationParams dp;
+        dp.airmode = static_cast<Airmode>(mode);
+        auto alloc = [&](AllocatorState& s, const Vec6& w, AllocationResult& out) {
+          if (which != Which::desat) return run(which, g_model, s, w, out);
+          Status st = Status::invalid_argument;
+          KEXPECT_NO_HEAP(st = allocate_sequential_desaturation(g_model, dp, s, w, out));
+          return st;
+        };
+        AllocatorState s;
+        AllocationResult out;
+        const Vec6 good = hover_wrench(*spec);
+        KEXPECT_EQ(static_cast<int>(alloc(s, good, out)), static_cast<int>(Status::ok));
+        real last[kMaxRotors];
+        for (int i = 0; i < n; ++i) last[i] = out.thrust_N[i];
+        for (int k = 2; k < 6; ++k) {
+          for (real b : big) {
+            Vec6 w = good;
+            w(k) = b;
+            if (k != 5) w(5) = -b;  // yaw against the other axis: inf - inf in the desaturation
+            const Status st = alloc(s, w, out);
+            KEXPECT_TRUE(st == Status::ok || st == Status::non_finite_output);
+            for (int i = 0; i < n; ++i) {
+              KEXPECT_TRUE(std::isfinite(out.thrust_N[i]));
+              KEXPECT_TRUE(std::isfinite(s.last_thrust_N[i]));
+              KEXPECT_GE(out.thrust_N[i], g_model.thrust_min_N[i]);
+              KEXPECT_LE(out.thrust_N[i], g_model.thrust_max_N[i]);
+            }
+            KEXPECT_TRUE(all_finite(out.wrench_realized));
+            if (st == Status::non_finite_output) {
+              ++held;
+              KEXPECT_TRUE(s.faults.has(kFaultNonFiniteOutput));
+              for (int i = 0; i < n; ++i) KEXPECT_EQ(out.thrust_N[i], last[i]);
+            } else {
+              for (int i = 0; i < n; ++i) last[i] = out.thrust_N[i];
+            }
+          }
+        }
+        // Recovers on the next sane command.
+        KEXPECT_EQ(static_cast<int>(alloc(s, good, out)), static_cast<int>(Status::ok));
+        for (int i = 0; i < n; ++i) KEXPECT_TRUE(std::isfinite(out.thrust_N[i]));
+      }
+      // The sequential desaturation reaches NaN for these commands on both frames (the F1 case).
+      if (which == Which::desat) {
+        KEXPECT_GT(held, 0);
+      }
+    }
+  }
+}
+
 KTEST(Alloc, RandomCommandsStayWithinLimitsForEveryPresetAndAllocator) {
   RngStream rng(2024, 0, kPurposeUser);
   int calls = 0;

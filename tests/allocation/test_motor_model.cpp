@@ -213,6 +213,32 @@ KTEST(Motor, NonFiniteReferenceHoldsTheLastOne) {
   for (int i = 0; i < 4; ++i) KEXPECT_NEAR(s.thrust_N[i], 0.7, 1e-6);
 }
 
+// Fuzz finding F6: from dt ~ 1e18 s the step overflows; the guard held the thrust and latched
+// kFaultNonFiniteOutput but the step returned ok. The status now says so (non_finite_output).
+KTEST(Motor, OverflowGuardIsReportedAsStatus) {
+  int fired = 0;
+  for (const MotorModelConfig& cfg : {kHexarotorMotors, kBaseQuadrotorMotors}) {
+    const real dts[5] = {1e16_r, 1e18_r, 1e20_r, 1e30_r, 3e38_r};
+    for (real dt : dts) {
+      MotorModelState s;
+      const real init[kMaxRotors] = {};
+      KASSERT_EQ(static_cast<int>(reset(cfg, s, 7, init)), static_cast<int>(Status::ok));
+      real ref[kMaxRotors] = {};
+      for (int i = 0; i < cfg.num_motors; ++i) ref[i] = 0.5_r * cfg.thrust_max_N;
+      const Status st = step(cfg, s, ref, dt);
+      KEXPECT_TRUE(all_finite(s.thrust_N, cfg.num_motors));
+      KEXPECT_TRUE(all_finite(s.axial_torque_Nm, cfg.num_motors));
+      if (s.faults.has(kFaultNonFiniteOutput)) {
+        ++fired;
+        KEXPECT_EQ(static_cast<int>(st), static_cast<int>(Status::non_finite_output));
+      } else {
+        KEXPECT_EQ(static_cast<int>(st), static_cast<int>(Status::ok));
+      }
+    }
+  }
+  KEXPECT_GT(fired, 0);  // the guard is reached (the hexarotor's at 1e18 s, as in the fuzz report)
+}
+
 KTEST(Motor, ValidationRejectsBadConfigurations) {
   MotorModelState s;
   // Quirk 9: rotor-speed state with negative thrust would take sqrt of a negative number.

@@ -128,6 +128,102 @@ static void test_arguments(void) {
   check(kestrel_command_to_pwm_us(2.0f, 1000.0f, 2000.0f) == 2000.0f, "pwm clamps");
 }
 
+/* v - v is 0 for a finite v and NaN for NaN or +-inf (no libm on the MCU side needed). */
+static int finitef_(float v) { return v - v == 0.0f; }
+
+/* Every output finite, motor_command in [0, 1] (the API's contract for any input). */
+static int outputs_sane(const kestrel_output* o) {
+  int ok = o->num_motors > 0 && o->num_motors <= KESTREL_MAX_MOTORS;
+  int i;
+  for (i = 0; i < KESTREL_MAX_MOTORS; ++i) {
+    ok = ok && o->motor_command[i] >= 0.0f && o->motor_command[i] <= 1.0f;
+    ok = ok && finitef_(o->thrust_setpoint_N[i]) && finitef_(o->thrust_N[i]);
+  }
+  for (i = 0; i < 6; ++i) ok = ok && finitef_(o->wrench_b[i]);
+  return ok;
+}
+
+/* Fuzz findings F1, F6, F7 (../../../shared/notes/fuzz.md), motor model off and on. */
+static void test_fuzz_findings(void) {
+  int motors;
+  for (motors = 0; motors <= 1; ++motors) {
+    kestrel_params p;
+    kestrel_state x;
+    kestrel_setpoint sp;
+    kestrel_output o, held;
+    kestrel_status st;
+    int i;
+    memset(&x, 0, sizeof x);
+    memset(&sp, 0, sizeof sp);
+    x.position_w[2] = 1.0f;
+    x.orientation_xyzw[3] = 1.0f;
+    sp.mode = KESTREL_MODE_POSITION;
+    sp.value[2] = 1.0f;
+    check(kestrel_default_params(KESTREL_PRESET_BASE_QUADROTOR, &p) == KESTREL_OK, "F1: default params");
+    p.use_motor_model = motors;
+
+    /* F1 (the reproducer): body rate 3.4e38 rad/s as the very first step -> NaN motor commands
+     * with KESTREL_OK before the fix. Now: held (zero: nothing held yet), finite, not OK. */
+    check(kestrel_init_params(&g_quad, &p) == KESTREL_OK, "F1: init");
+    x.angvel_b[2] = 3.4e38f;
+    st = kestrel_step(&g_quad, &x, &sp, 0.01f, &o);
+    check(st == KESTREL_NON_FINITE_OUTPUT, "F1: 3.4e38 rad/s body rate is not OK");
+    check(outputs_sane(&o), "F1: 3.4e38 rad/s body rate gives finite outputs, commands in [0, 1]");
+    check((o.faults & KESTREL_FAULT_NON_FINITE_OUTPUT) != 0, "F1: non-finite-output fault latched");
+    /* A sane step, then the absurd rate again: the last finite thrusts are held. */
+    x.angvel_b[2] = 0.0f;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &held) == KESTREL_OK, "F1: sane step after the hold is OK");
+    check(outputs_sane(&held), "F1: sane step outputs");
+    x.angvel_b[2] = 3.4e38f;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_NON_FINITE_OUTPUT, "F1: absurd rate again not OK");
+    check(outputs_sane(&o), "F1: absurd rate again sane outputs");
+    for (i = 0; i < o.num_motors; ++i) {
+      check(o.thrust_setpoint_N[i] == held.thrust_setpoint_N[i], "F1: last finite thrust held");
+      check(o.motor_command[i] == held.motor_command[i], "F1: last finite command held");
+    }
+    /* The held controller wrench is now the huge finite one: a NaN setpoint must not bring NaN. */
+    sp.value[0] = 0.0f / (sp.value[1] + 0.0f); /* NaN without <math.h> */
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) != KESTREL_OK, "F1: NaN setpoint after absurd rate not OK");
+    check(outputs_sane(&o), "F1: NaN setpoint after absurd rate sane outputs");
+    sp.value[0] = 0.0f;
+    x.angvel_b[2] = 0.0f;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_OK && outputs_sane(&o), "F1: recovers");
+
+    /* F1, second trigger: k_angvel.z = 1e37 (with 10 rad/s, 1e38 N m) is refused at init. */
+    p.k_angvel[2] = 1e37f;
+    check(kestrel_init_params(&g_quad, &p) == KESTREL_INVALID_ARGUMENT, "F1: k_angvel.z = 1e37 refused");
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_INVALID_ARGUMENT, "F1: refused init leaves it unusable");
+    p.k_angvel[2] = 1e6f; /* the bound itself is accepted: outputs stay sane at 10 rad/s */
+    check(kestrel_init_params(&g_quad, &p) == KESTREL_OK, "F1: k_angvel.z = 1e6 accepted");
+    x.angvel_b[2] = 10.0f;
+    st = kestrel_step(&g_quad, &x, &sp, 0.01f, &o);
+    check(st == KESTREL_OK || st == KESTREL_NON_FINITE_OUTPUT, "F1: gain at the bound");
+    check(outputs_sane(&o), "F1: gain at the bound sane outputs");
+    x.angvel_b[2] = 0.0f;
+
+    /* F6: dt_s is bounded by KESTREL_MAX_DT_S. */
+    check(kestrel_init(&g_quad, KESTREL_PRESET_HEXAROTOR) == KESTREL_OK, "F6: init hexa");
+    check(kestrel_step(&g_quad, &x, &sp, 1e18f, &o) == KESTREL_INVALID_ARGUMENT, "F6: dt 1e18 s refused");
+    check(kestrel_step(&g_quad, &x, &sp, 1.5f, &o) == KESTREL_INVALID_ARGUMENT, "F6: dt above 1 s refused");
+    check(kestrel_step(&g_quad, &x, &sp, KESTREL_MAX_DT_S, &o) == KESTREL_OK, "F6: dt of 1 s accepted");
+    check(outputs_sane(&o), "F6: dt of 1 s sane outputs");
+
+    /* F7: a finite non-unit quaternion is refused. */
+    check(kestrel_init_params(&g_quad, &p) == KESTREL_OK, "F7: init");
+    x.orientation_xyzw[3] = 0.0f;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_INVALID_ARGUMENT, "F7: zero quaternion refused");
+    x.orientation_xyzw[3] = 1000.0f;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_INVALID_ARGUMENT, "F7: |q| = 1000 refused");
+    x.orientation_xyzw[3] = 1.0f + 2.0f * KESTREL_QUAT_NORM_TOLERANCE;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_INVALID_ARGUMENT, "F7: |q| = 1 + 2 tol refused");
+    x.orientation_xyzw[3] = 1.0f + 0.5f * KESTREL_QUAT_NORM_TOLERANCE;
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_OK, "F7: |q| = 1 + tol/2 accepted");
+    x.orientation_xyzw[3] = 0.0f / (x.orientation_xyzw[0] + 0.0f); /* NaN: a non-finite input */
+    check(kestrel_step(&g_quad, &x, &sp, 0.01f, &o) == KESTREL_NON_FINITE_INPUT, "F7: NaN quaternion is non-finite input");
+    check(outputs_sane(&o), "F7: NaN quaternion sane outputs");
+  }
+}
+
 /* Take off to 1 m, then fly to (0.5, -0.3, 1.2) with yaw 0.3; 8 s at 500 Hz. */
 static void test_closed_loop_quad(void) {
   const float dt = 0.002f;
@@ -256,6 +352,7 @@ int main(void) {
   test_arguments();
   test_closed_loop_quad();
   test_hexa_motor_failure();
+  test_fuzz_findings();
   capi_test_print("  storage used ");
   capi_test_print_int((long)kestrel_storage_used());
   capi_test_print(" of ");

@@ -72,6 +72,30 @@ KTEST(LeeController, PresetsValidate) {
   KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
 }
 
+// Fuzz finding F1: finite but absurd gains (k_angvel.z = 1e37: 1e38 N m at 10 rad/s) overflowed the
+// allocation on every step. Parameters with which overflow is unavoidable are refused up front.
+KTEST(LeeController, GainsMassInertiaGravityBounded) {
+  LeeParams p = lee_params_base_quadrotor();
+  p.gain_ranges.max.k_angvel[2] = 1e37_r;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
+  p = lee_params_base_quadrotor();
+  p.gain_ranges.min.k_pos[0] = -2 * kLeeMaxGain;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
+  p = lee_params_base_quadrotor();
+  p.gain_ranges.min.k_rot[0] = kLeeMaxGain;  // at the bound: accepted
+  p.gain_ranges.max.k_rot[0] = kLeeMaxGain;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::ok);
+  p = lee_params_base_quadrotor();
+  p.mass_kg = 2 * kLeeMaxMassKg;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
+  p = lee_params_base_quadrotor();
+  p.inertia_b(1, 1) = 2 * kLeeMaxInertiaKgm2;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
+  p = lee_params_base_quadrotor();
+  p.gravity_w[2] = -2 * kLeeMaxGravityMps2;
+  KEXPECT_TRUE(validate_lee_params(p) == Status::invalid_argument);
+}
+
 KTEST(LeeController, HoverGivesWeightAndZeroTorque) {
   for (std::size_t k = 0; k < sizeof(kKinds) / sizeof(kKinds[0]); ++k) {
     const LeeParams p = params_for(k);

@@ -273,3 +273,29 @@ KTEST(SensorImu, HoverGravityBiasNoiseAndSaturation) {
   KEXPECT_EQ(static_cast<int>(imu_update(v, s, kIdentity, Vec3::Zero(), Vec3::Zero(), kIdentity, 0, r3, out)),
              static_cast<int>(Status::invalid_argument));
 }
+
+// The IMU's actual sensor frame is the nominal mount followed by the misalignment, both relative
+// to the body: q_bs = q_bs_nominal * misalignment_bs (misalignment_bs is "the actual sensor frame
+// relative to the nominal mount"). Two non-commuting 90 deg rotations make the order visible:
+// nominal yaw 90 deg, misalignment roll 90 deg, so R_bs = Rz Rx and a reading is Rx^T Rz^T v.
+// (The suite let the swapped composition through: tests/MUTANTS.md, mutant b.)
+KTEST(SensorImu, MisalignmentComposesAfterTheNominalMount) {
+  ImuParams p;
+  p.enable_noise = false;
+  p.enable_bias = false;
+  ImuState s;
+  s.misalignment_bs = quat_from_euler_xyz(kPi / 2, 0, 0);       // roll 90 deg
+  const Quat nominal = quat_from_euler_xyz(0, 0, kPi / 2);      // yaw 90 deg
+  RngStream rng(3, 0, kPurposeSensorNoise);
+  ImuSample out;
+  KASSERT_EQ(static_cast<int>(imu_update(p, s, kIdentity, Vec3::Zero(), Vec3(1, 2, 3), nominal, 0.005_r, rng, out)), 0);
+  // Rz^T (1, 2, 3) = (2, -1, 3); Rx^T (2, -1, 3) = (2, 3, 1). Swapped order: (3, -1, -2).
+  KEXPECT_NEAR(out.gyro_s[0], 2, 1e-5);
+  KEXPECT_NEAR(out.gyro_s[1], 3, 1e-5);
+  KEXPECT_NEAR(out.gyro_s[2], 1, 1e-5);
+  // Level and still: specific force (0, 0, g) in the world reads Rx^T Rz^T (0, 0, g) = (0, g, 0)
+  // (swapped: (g, 0, 0)).
+  KEXPECT_NEAR(out.accel_s[0], 0, 1e-5);
+  KEXPECT_NEAR(out.accel_s[1], 9.81, 1e-4);
+  KEXPECT_NEAR(out.accel_s[2], 0, 1e-5);
+}

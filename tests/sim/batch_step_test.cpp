@@ -169,6 +169,10 @@ Robot random_robot(const Stack& s, RngStream& rng, int k) {
     case 6: r.contact_force_w = Vec3(0.5_r, -0.2_r, 3); r.contact_torque_b = Vec3(0.001_r, 0, -0.002_r); break;
     case 7: r.contact_force_w[2] = std::numeric_limits<real>::infinity(); break;
     case 8: r.state.orientation_wb = quat_from_euler_xyz(3.0_r, 0.1_r, 0.2_r); break;  // upside down
+    // Fuzz F1: finite body rates whose Lee torque overflows the allocation to NaN; the scalar
+    // allocator holds the last finite thrust, and the twin must send such a lane to it.
+    case 11: r.state.angvel_b = Vec3(0, 0, 3.4e38_r); break;
+    case 12: r.state.angvel_b = Vec3(-1e37_r, 2e37_r, 0); break;
     default: break;
   }
   return r;

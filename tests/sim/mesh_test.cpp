@@ -2,11 +2,14 @@
 // convex hull: a unit cube loaded from each format must answer like the analytic box.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/mesh.hpp"
@@ -167,4 +170,143 @@ TEST(SimMesh, MeshObstaclesInAWorld) {
   c.env.assets[0].mesh_file = tmp("nope.stl");
   EXPECT_FALSE(World::create(c, err));
   EXPECT_NE(err.find("env.assets.cubes"), std::string::npos) << err;
+}
+
+// Fuzz finding F3: a 4-vertex OBJ obstacle ~5e22 m long made libccd's MPR loop forever (its portal
+// loops ignore max_iterations), so `kestrel run` hung in the first steps. Mesh coordinates are
+// bounded at load, with the file, the vertex, the field and the allowed range in the message.
+TEST(SimMesh, FarVerticesAreRefusedAtLoad) {
+  const std::string data = std::string(KESTREL_SIM_TEST_DIR) + "/data/";
+  TriangleMesh m;
+  std::string err;
+  EXPECT_FALSE(load_mesh(data + "fuzz_f3_long.obj", m, err));
+  EXPECT_NE(err.find("fuzz_f3_long.obj: vertex 2 coordinate x = -5e+22 is out of range; allowed: a finite value with |x| <= "
+                     "1e+06 m (kMaxMeshCoordinateM"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(load_mesh(data + "fuzz_f2_far.obj", m, err));  // the F2 file: 1e9 m
+  EXPECT_NE(err.find("vertex 2 coordinate x = -1e+09 is out of range"), std::string::npos) << err;
+  EXPECT_TRUE(m.vertices.empty());
+  // At the bound: accepted.
+  const std::string p = tmp("edge.obj");
+  std::ofstream(p) << "v 0 0 0\nv -1e6 0 0\nv 0 0.5 5\nf 1 2 3\n";
+  EXPECT_TRUE(load_mesh(p, m, err)) << err;
+  // Through a scenario's asset class (the fuzz report's scene): refused at set-up, naming the class.
+  WorldConfig c;
+  ASSERT_TRUE(registries().envs.make("empty", c.env));
+  c.env.num_envs = 1;
+  AssetClass a;
+  a.name = "m";
+  a.kind = AssetKind::mesh;
+  a.mesh_file = data + "fuzz_f3_long.obj";
+  a.num_assets = a.min_num_assets = 2;
+  a.max_angular_speed_rad_s = 1;
+  c.env.assets.push_back(a);
+  EXPECT_FALSE(World::create(c, err));
+  EXPECT_NE(err.find("env.assets.m: "), std::string::npos) << err;
+  EXPECT_NE(err.find("kMaxMeshCoordinateM"), std::string::npos) << err;
+}
+
+// F3's second line of defence: a hull built in code (no loader) with the 5e22 m vertex still
+// returns from collide() (the MPR call has a budget of support calls), answering "no contact".
+TEST(SimMesh, MprGivesUpInsteadOfLoopingOnAbsurdHulls) {
+  const Vec3 v[4] = {Vec3(0, 0, 0), Vec3(-5e22_r, 0, 0), Vec3(0, 0.5_r, 5), Vec3(1, -5.5_r, 0)};
+  Shape hull;
+  hull.type = ShapeType::convex_hull;
+  hull.vertices = v;
+  hull.num_vertices = 4;
+  hull.position_w = Vec3(1, 1, 1);
+  hull.orientation_wb = Quat(Eigen::AngleAxis<real>(0.3_r, Vec3(0, 0, 1)));
+  for (ShapeType t : {ShapeType::box, ShapeType::cylinder, ShapeType::capsule}) {
+    Shape robot;
+    robot.type = t;
+    robot.radius_m = 0.2_r;
+    robot.half_length_m = 0.1_r;
+    robot.half_extents_m = Vec3(0.15_r, 0.15_r, 0.05_r);
+    for (const Vec3& off : {Vec3(0, 0, 0), Vec3(0.5_r, 0.2_r, 1), Vec3(-3, 0, 0.5_r)}) {
+      robot.position_w = hull.position_w + off;
+      const Contact k = collide(robot, hull);  // returns (before the guard: never)
+      if (k.hit) {
+        EXPECT_TRUE(std::isfinite(k.depth_m));
+      }
+    }
+  }
+}
+
+namespace {
+// The welding of the loader before F8 (linear search from the newest vertex, operator==), kept
+// here as the reference the hash map must reproduce index for index.
+int old_vertex_index(std::vector<Vec3>& vs, const Vec3& v) {
+  for (std::size_t i = vs.size(); i-- > 0;)
+    if (vs[i] == v) return static_cast<int>(i);
+  vs.push_back(v);
+  return static_cast<int>(vs.size() - 1);
+}
+std::string write_binary_stl_soup(const char* name, const std::vector<std::array<float, 9>>& tris) {
+  const std::string p = tmp(name);
+  std::ofstream f(p, std::ios::binary);
+  char header[80] = {};
+  f.write(header, 80);
+  const std::uint32_t n = static_cast<std::uint32_t>(tris.size());
+  f.write(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : tris) {
+    const float normal[3] = {0, 0, 1};
+    f.write(reinterpret_cast<const char*>(normal), 12);
+    f.write(reinterpret_cast<const char*>(t.data()), 36);
+    const std::uint16_t attr = 0;
+    f.write(reinterpret_cast<const char*>(&attr), 2);
+  }
+  return p;
+}
+}  // namespace
+
+// Fuzz finding F8: STL vertex welding searched linearly per vertex, quadratic in the vertex count
+// (random binary STLs of 10k / 20k / 40k triangles took 0.76 / 2.64 / 9.1 s to load). Now a hash
+// map on the coordinate bits; the vertex numbering must be exactly the old one (first appearance),
+// -0 and +0 still one vertex. (Timing, not asserted: the 40k-triangle grid below loads in ~20 ms
+// on the shared 2-core build machine.)
+TEST(SimMesh, StlWeldingMatchesTheLinearSearchAndScales) {
+  // A small soup with repeats in every order, -0 next to +0, and a vertex used once.
+  std::vector<std::array<float, 9>> soup;
+  const float pts[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-0.0f, 1, 0}, {1, 1, -0.0f}, {0.5f, 0.25f, 3}};
+  const int order[8][3] = {{0, 1, 2}, {2, 1, 4}, {3, 4, 1}, {5, 0, 3}, {4, 5, 2}, {1, 3, 0}, {2, 2, 5}, {0, 4, 3}};
+  for (const auto& o : order) {
+    std::array<float, 9> t{};
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) t[3 * k + c] = pts[o[k]][c];
+    soup.push_back(t);
+  }
+  TriangleMesh m;
+  std::string err;
+  ASSERT_TRUE(load_mesh(write_binary_stl_soup("soup.stl", soup), m, err)) << err;
+  std::vector<Vec3> ref;
+  ASSERT_EQ(m.triangles.size(), soup.size());
+  for (std::size_t t = 0; t < soup.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 v(soup[t][3 * k], soup[t][3 * k + 1], soup[t][3 * k + 2]);
+      EXPECT_EQ(m.triangles[t][k], old_vertex_index(ref, v)) << t << " " << k;
+    }
+  ASSERT_EQ(m.vertices.size(), ref.size());
+  EXPECT_EQ(m.vertices.size(), 5u);  // (0,1,0) and (-0,1,0) are one vertex, as (1,1,0) and (1,1,-0)
+  for (std::size_t i = 0; i < ref.size(); ++i) EXPECT_EQ(m.vertices[i], ref[i]) << i;
+
+  // A 142 x 142-cell grid as a soup: 40,328 triangles, (142 + 1)^2 = 20,449 distinct vertices.
+  const int n = 142;
+  std::vector<std::array<float, 9>> grid;
+  auto at = [](int i, int j) { return std::array<float, 3>{0.01f * static_cast<float>(i), 0.01f * static_cast<float>(j), 0.0f}; };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const std::array<float, 3> a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      grid.push_back({a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]});
+      grid.push_back({a[0], a[1], a[2], c[0], c[1], c[2], d[0], d[1], d[2]});
+    }
+  ASSERT_EQ(grid.size(), 40328u);
+  ASSERT_TRUE(load_mesh(write_binary_stl_soup("grid.stl", grid), m, err)) << err;
+  EXPECT_EQ(m.triangles.size(), 40328u);
+  EXPECT_EQ(m.vertices.size(), 20449u);
+  // First-appearance numbering: cell (0, 0) gives vertices 0, 1, 2, then d = 3.
+  EXPECT_EQ(m.triangles[0][0], 0);
+  EXPECT_EQ(m.triangles[0][1], 1);
+  EXPECT_EQ(m.triangles[0][2], 2);
+  EXPECT_EQ(m.triangles[1][2], 3);
 }

@@ -52,7 +52,7 @@ TEST(SimScenario, FileOnDiskWithOverrides) {
 
 TEST(SimScenario, ClearErrors) {
   EXPECT_EQ(error_of("env: {name: empty, num_envs: -3}"),
-            "scenario.yaml: env.num_envs: expected a positive integer, got \"-3\"");
+            "scenario.yaml: env.num_envs: expected an integer in [1, 1048576] (kMaxNumEnvs), got \"-3\"");
   EXPECT_EQ(error_of("robot: quadx"), "scenario.yaml: robot: unknown robot \"quadx\"; known: base_quadrotor, ground_vehicle, hexarotor, x500");
   EXPECT_NE(error_of("env: nowhere").find("known: dynamic, empty, env_with_obstacles, forest, goal_box_room, lidar_navigation"), std::string::npos);
   EXPECT_NE(error_of("env: {name: empty, num_env: 3}").find("env.num_env: unknown field; allowed: name,"), std::string::npos);
@@ -70,4 +70,93 @@ TEST(SimScenario, MissingFileNamesIt) {
   std::string err;
   EXPECT_FALSE(load_scenario_file("/nonexistent/x.yaml", c, err));
   EXPECT_EQ(err, "/nonexistent/x.yaml: cannot open file");
+}
+
+// Fuzz finding F5: counts without an upper bound ended in std::bad_alloc, signed overflow (a tree
+// class of 6e8 assets: 6e8 * 4 slots) or a hang (2e9 substeps per physics step). Every count now
+// has a documented maximum (sim/limits.hpp), refused with the field and the allowed range.
+TEST(SimScenario, CountsHaveUpperBoundsNamedInTheMessage) {
+  EXPECT_EQ(error_of("robot: {name: base_quadrotor, robots_per_env: 2000000000}"),
+            "scenario.yaml: robot.robots_per_env: expected an integer in [1, 1024] (kMaxRobotsPerEnv), got \"2000000000\"");
+  EXPECT_EQ(error_of("env: {name: empty, assets: [{name: c, kind: cube, num_assets: 200000000}]}"),
+            "scenario.yaml: env.assets.c.num_assets: expected an integer in [0, 65536] (kMaxAssetsPerClass), got \"200000000\"");
+  EXPECT_EQ(error_of("env: {name: empty, assets: [{name: t, kind: tree, num_assets: 600000000}]}"),
+            "scenario.yaml: env.assets.t.num_assets: expected an integer in [0, 65536] (kMaxAssetsPerClass), got \"600000000\"");
+  EXPECT_EQ(error_of("sim: {name: base_sim, substeps: 2000000000}"),
+            "scenario.yaml: sim.substeps: expected an integer in [1, 1000] (kMaxSubsteps), got \"2000000000\"");
+  EXPECT_EQ(error_of("env: {name: empty, num_envs: 2000000000}"),
+            "scenario.yaml: env.num_envs: expected an integer in [1, 1048576] (kMaxNumEnvs), got \"2000000000\"");
+  EXPECT_EQ(error_of("env: {name: empty, max_latency_physics_steps: 2147483647}"),
+            "scenario.yaml: env.max_latency_physics_steps: expected an integer in [0, 1000] (kMaxLatencyPhysicsSteps), got "
+            "\"2147483647\"");
+  EXPECT_EQ(error_of("threads: 100000"), "scenario.yaml: threads: expected an integer in [1, 1024] (kMaxThreads), got \"100000\"");
+  EXPECT_NE(error_of("env: {name: empty, num_physics_steps_per_env_step_mean: 1e6}")
+                .find("env.num_physics_steps_per_env_step_mean: expected a number in [1, 1000]"),
+            std::string::npos);
+  // Several classes each within its bound, together beyond the slots of one environment (two
+  // large classes also overflowed the `cap +=` sum).
+  std::string many = "env: {name: empty, assets: [";
+  for (int i = 0; i < 5; ++i) many += std::string(i ? ", " : "") + "{name: t" + std::to_string(i) + ", kind: tree, num_assets: 60000}";
+  many += "]}";
+  EXPECT_EQ(error_of(many),
+            "scenario.yaml: env.assets (obstacle slots per environment: the sum of num_assets, a tree counting 4): 1200000 is out "
+            "of range; allowed: 0..1048576 (kMaxObstacleSlotsPerEnv)");
+  EXPECT_NE(error_of("max_memory_gib: 0").find("max_memory_gib: expected a number in"), std::string::npos);
+}
+
+// The same bounds for a config built in code (the C++ API, or kestrel run --envs after loading).
+TEST(SimScenario, WorldCreateChecksTheBoundsOfConfigsBuiltInCode) {
+  auto refused = [](const WorldConfig& c) {
+    std::string err;
+    EXPECT_FALSE(World::create(c, err));
+    return err;
+  };
+  WorldConfig c;
+  c.env.num_envs = 1;
+  c.robot.robots_per_env = 2000000000;
+  EXPECT_EQ(refused(c), "robot.robots_per_env: 2000000000 is out of range; allowed: 1..1024 (kMaxRobotsPerEnv)");
+  c = WorldConfig();
+  c.env.num_envs = 1;
+  c.sim.substeps = 2000000000;
+  EXPECT_EQ(refused(c), "sim.substeps: 2000000000 is out of range; allowed: 1..1000 (kMaxSubsteps)");
+  c = WorldConfig();
+  c.env.num_envs = 1 << 30;
+  EXPECT_EQ(refused(c), "env.num_envs: 1073741824 is out of range; allowed: 1..1048576 (kMaxNumEnvs)");
+  c = WorldConfig();
+  c.env.num_envs = 1;
+  AssetClass t;
+  t.name = "t";
+  t.kind = AssetKind::tree;
+  t.num_assets = 600000000;
+  t.min_num_assets = 0;
+  c.env.assets.push_back(t);
+  EXPECT_EQ(asset_class_slots(t), 2147483647);  // saturated, never negative (was signed overflow)
+  EXPECT_EQ(refused(c), "env.assets.t.num_assets: 600000000 is out of range; allowed: 0..65536 (kMaxAssetsPerClass)");
+  c = WorldConfig();
+  c.env.num_envs = 1;
+  c.env.max_latency_physics_steps = 2147483647;  // rng % (max + 1) overflowed
+  EXPECT_EQ(refused(c), "env.max_latency_physics_steps: 2147483647 is out of range; allowed: 0..1000 (kMaxLatencyPhysicsSteps)");
+}
+
+// Set-up estimates the memory a world needs before allocating any of it, and refuses beyond
+// max_memory_gib (default 4 GiB; scenario `max_memory_gib`, kestrel run --max-memory-gib).
+TEST(SimScenario, MemoryEstimateRefusesBeforeAllocating) {
+  WorldConfig c;
+  std::string err;
+  ASSERT_TRUE(load_scenario_string("env: {name: empty, num_envs: 1000000, assets: [{name: c, kind: cube, num_assets: 1000}]}\n",
+                                   "big.yaml", c, err))
+      << err;
+  EXPECT_GT(World::estimate_bytes(c), 100.0 * (1u << 30));
+  EXPECT_FALSE(World::create(c, err));
+  EXPECT_EQ(err.find("memory: this world needs about 1"), 0u) << err;
+  EXPECT_NE(err.find("more than max_memory_gib = 4 GiB"), std::string::npos) << err;
+  // The cap is a setting: a small world under a tiny cap is refused, under the default it builds.
+  ASSERT_TRUE(load_scenario_string("env: {name: empty, num_envs: 64}\nmax_memory_gib: 0.00001\n", "small.yaml", c, err)) << err;
+  EXPECT_FALSE(World::create(c, err));
+  EXPECT_NE(err.find("more than max_memory_gib = 1e-05 GiB"), std::string::npos) << err;
+  c.max_memory_gib = kDefaultMaxMemoryGiB;
+  auto w = World::create(c, err);
+  ASSERT_TRUE(w) << err;
+  // The estimate is what the built world reports.
+  EXPECT_EQ(World::estimate_bytes(c), static_cast<double>(w->bytes_per_env()) * w->num_envs());
 }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "heap_counter.hpp"
@@ -323,6 +324,46 @@ TEST(SimTerrain, ScenarioErrorsNameFileFieldAndAllowedValues) {
   ASSERT_FALSE(World::create(c, err));
   EXPECT_NE(err.find("scene.yaml: env.terrain.mesh_file: "), std::string::npos) << err;
   EXPECT_NE(err.find("nope.obj: cannot open file"), std::string::npos) << err;
+}
+
+// Fuzz finding F4: the loaders sized their pixel buffers from the header before checking it: the
+// 19-byte P5 file "P5\n46341 46341\n255\n" asked for 17 GB, the 68-byte grey PNG (IHDR 1e6 x 1e6)
+// for 1 TB, ending in std::bad_alloc with no message. Both are now refused from the header, with
+// the file, the field and the allowed range; a plausible header with too little data too.
+TEST(SimTerrain, HugeHeightmapHeadersAreRefusedBeforeAllocating) {
+  for (const char* img : {"fuzz_f4_huge.pgm", "fuzz_f4_huge.png"}) {
+    WorldConfig c;
+    std::string err;
+    ASSERT_TRUE(load_scenario_string("env: {name: empty, num_envs: 1, terrain: {type: heightfield, image_file: " + kData + img + "}}\n",
+                                     "scene.yaml", c, err))
+        << err;
+    kestrel::test::HeapCounter heap;
+    ASSERT_FALSE(World::create(c, err)) << img;
+    EXPECT_LT(heap.largest_allocation(), 64u * 1024 * 1024) << img;  // refused from the header: no pixel buffer
+    EXPECT_NE(err.find("scene.yaml: env.terrain.image_file: "), std::string::npos) << err;
+    EXPECT_NE(err.find(img), std::string::npos) << err;
+    EXPECT_NE(err.find("width x height <= 67108864 (kMaxHeightmapSamples"), std::string::npos) << err;
+  }
+  // A header within the cap whose data is missing: refused before the buffer, naming the sizes.
+  const std::string dir = ::testing::TempDir();
+  const std::string path = dir + "/kestrel_truncated.pgm";
+  {
+    FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("P5\n4000 4000\n65535\n0123456789", f);
+    std::fclose(f);
+  }
+  WorldConfig c;
+  std::string err;
+  ASSERT_TRUE(load_scenario_string("env: {name: empty, num_envs: 1, terrain: {type: heightfield, image_file: " + path + "}}\n",
+                                   "scene.yaml", c, err));
+  kestrel::test::HeapCounter heap;
+  ASSERT_FALSE(World::create(c, err));
+  EXPECT_LT(heap.largest_allocation(), 32u * 1024 * 1024);
+  EXPECT_NE(err.find("kestrel_truncated.pgm\": truncated pixel data (4000 x 4000 samples need at least 32000001 bytes"),
+            std::string::npos)
+      << err;
+  std::remove(path.c_str());
 }
 
 TEST(SimTerrain, NoHeapInsideStepWithTerrainsMeasuredHeightsAndRotatingObstacles) {

@@ -19,9 +19,13 @@ class HeapCounter {
   HeapCounter& operator=(const HeapCounter&) = delete;
   /// Allocations (new, new[], malloc, calloc, realloc, aligned variants) since construction.
   std::size_t allocations() const;
+  /// Bytes of the largest single request since construction (set-up size checks: a loader must
+  /// refuse a bad header before it sizes a buffer from it).
+  std::size_t largest_allocation() const;
 
  private:
   std::size_t start_;
+  std::size_t outer_largest_;
 };
 
 /// Total allocations seen on this thread since program start (for diagnostics).

@@ -46,7 +46,9 @@ static_assert(KESTREL_FAULT_NON_FINITE_OUTPUT == kFaultNonFiniteOutput && KESTRE
                   KESTREL_FAULT_SATURATED == kFaultSaturated,
               "fault bits are kestrel::Fault values");
 static_assert(KESTREL_MAX_MOTORS == al::kMaxRotors, "KESTREL_MAX_MOTORS is kMaxRotors");
-static_assert(static_cast<int>(KESTREL_NOT_CONVERGED) == static_cast<int>(Status::not_converged), "status values");
+static_assert(static_cast<int>(KESTREL_NOT_CONVERGED) == static_cast<int>(Status::not_converged) &&
+                  static_cast<int>(KESTREL_NON_FINITE_OUTPUT) == static_cast<int>(Status::non_finite_output),
+              "status values");
 
 kestrel_status to_c(Status s) { return static_cast<kestrel_status>(static_cast<int>(s)); }
 
@@ -69,6 +71,27 @@ void set3(float* dst, const Vec3& v) {
   for (int i = 0; i < 3; ++i) dst[i] = static_cast<float>(v[i]);
 }
 Vec3 vec3(const float* v) { return Vec3(static_cast<real>(v[0]), static_cast<real>(v[1]), static_cast<real>(v[2])); }
+
+// Last line of defence behind the allocator's own hold (kestrel_step's output check): replaces a
+// non-finite or out-of-range output with the allocator's held thrust (finite by construction; the
+// motor's lower limit if even that is not), a non-finite wrench with zero. Cold: never runs unless
+// a stage broke its contract.
+__attribute__((noinline, cold)) void repair_outputs(CapiStack* s, kestrel_output* out) {
+  const int n = s->model.num_rotors;
+  for (int i = 0; i < n; ++i) {
+    const real lo = s->airframe.thrust_min_N[i], hi = s->airframe.thrust_max_N[i];
+    real f = s->alloc_state.last_thrust_N[i];
+    if (!is_finite(f)) f = lo;
+    const float cmd = out->motor_command[i];
+    if (!(cmd >= 0.0f && cmd <= 1.0f)) out->motor_command[i] = static_cast<float>(hi > lo ? clamp((f - lo) / (hi - lo), 0_r, 1_r) : 0_r);
+    if (!is_finite(static_cast<real>(out->thrust_setpoint_N[i]))) out->thrust_setpoint_N[i] = static_cast<float>(f);
+    if (!is_finite(static_cast<real>(out->thrust_N[i]))) out->thrust_N[i] = static_cast<float>(f);
+  }
+  for (int i = 0; i < 6; ++i) {
+    if (!is_finite(static_cast<real>(out->wrench_b[i]))) out->wrench_b[i] = 0.0f;
+  }
+  s->alloc_state.faults.raise(kFaultNonFiniteOutput);
+}
 
 }  // namespace
 
@@ -159,7 +182,19 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
   if (m != KESTREL_MODE_POSITION && m != KESTREL_MODE_VELOCITY && m != KESTREL_MODE_ATTITUDE && m != KESTREL_MODE_RATES) {
     return KESTREL_INVALID_ARGUMENT;
   }
-  if (!(dt_s > 0.0f) || !is_finite(static_cast<real>(dt_s))) return KESTREL_INVALID_ARGUMENT;
+  // dt_s in (0, KESTREL_MAX_DT_S]: a huge period (~1e16 s and up) overflows the motor model (F6).
+  if (!(dt_s > 0.0f) || !(dt_s <= KESTREL_MAX_DT_S)) return KESTREL_INVALID_ARGUMENT;
+  // A finite quaternion must be unit within KESTREL_QUAT_NORM_TOLERANCE (a zero or scaled one
+  // gives finite but meaningless commands). Compared squared: no sqrt. A non-finite one is left to
+  // the controller, which holds its output and reports NON_FINITE_INPUT.
+  {
+    const float* q = st->orientation_xyzw;
+    const float n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    constexpr float kLo = (1.0f - KESTREL_QUAT_NORM_TOLERANCE) * (1.0f - KESTREL_QUAT_NORM_TOLERANCE);
+    constexpr float kHi = (1.0f + KESTREL_QUAT_NORM_TOLERANCE) * (1.0f + KESTREL_QUAT_NORM_TOLERANCE);
+    const bool q_finite = q[0] * 0.0f + q[1] * 0.0f + q[2] * 0.0f + q[3] * 0.0f == 0.0f;
+    if (q_finite && !(n2 >= kLo && n2 <= kHi)) return KESTREL_INVALID_ARGUMENT;
+  }
 
   RigidBodyState body;
   body.position_w = vec3(st->position_w);
@@ -198,6 +233,21 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
   }
   const Vec6 w = co.wrench_b.as_vec6();
   for (int i = 0; i < 6; ++i) out->wrench_b[i] = static_cast<float>(w[i]);
+  // The contract of this API: every output finite, motor_command in [0, 1], whatever the input.
+  // The stages guarantee it themselves; checked here once more (branch-free probe: v * 0 is +-0
+  // for finite v, NaN otherwise) so a broken stage cannot reach the motors. A double core's
+  // finite value beyond the float range also becomes inf in the conversion and is caught here.
+  float probe = 0.0f;
+  bool in_range = true;
+  for (int i = 0; i < n; ++i) {
+    probe += out->thrust_setpoint_N[i] * 0.0f + out->thrust_N[i] * 0.0f;
+    in_range = in_range && out->motor_command[i] >= 0.0f && out->motor_command[i] <= 1.0f;
+  }
+  for (int i = 0; i < 6; ++i) probe += out->wrench_b[i] * 0.0f;
+  if (!(probe == 0.0f) || !in_range) {
+    repair_outputs(s, out);
+    if (worst == Status::ok) worst = Status::non_finite_output;
+  }
   out->saturated_mask = s->alloc_out.saturated_mask();
   out->faults = kestrel_faults(storage);
   return to_c(worst);

@@ -94,8 +94,9 @@ void apply_pinv(const AllocationModel& model, const Vec6& wrench_cmd, real* thru
 /// Plain pseudo-inverse allocation, as the reference: f = clamp(A+ w, min, max) (the clamp the
 /// reference's motor model applies to its reference). Saturation bit i: A+ w was strictly outside
 /// motor i's limits. Returns ok, or non_finite_input (command had NaN/inf: the last output is
-/// held, kFaultNonFiniteCommand latched in state.faults, unallocated = 0), or invalid_argument
-/// for an empty model.
+/// held, kFaultNonFiniteCommand latched in state.faults, unallocated = 0), non_finite_output
+/// (a finite command so large that A+ w overflowed: the last output is held, kFaultNonFiniteOutput
+/// latched), or invalid_argument for an empty model.
 [[nodiscard]] Status allocate_pinv(const AllocationModel& model, AllocatorState& state, const Vec6& wrench_cmd,
                                    AllocationResult& out);
 [[nodiscard]] inline Status allocate_pinv(const AllocationModel& model, AllocatorState& state, const Wrench& wrench_cmd,
@@ -108,11 +109,17 @@ namespace detail {
 Vec6 realized_wrench(const AllocationModel& model, const real* thrust_N);
 /// Shared tail of every allocator: clamps thrust_N into the limits, fills realized/unallocated,
 /// stores the output in the state and latches kFaultSaturated. Entries >= num_rotors of
-/// out.thrust_N are not written (they stay as the result was constructed: zero).
-void finish_allocation(const AllocationModel& model, AllocatorState& state, const Vec6& wrench_cmd,
-                       AllocationResult& out);
-/// Shared non-finite-command path: holds state.last_thrust_N (clamped to the current limits).
+/// out.thrust_N are not written (they stay as the result was constructed: zero). A non-finite
+/// thrust (finite command that overflowed) goes to hold_nonfinite_result() instead: returns ok
+/// or non_finite_output.
+[[nodiscard]] Status finish_allocation(const AllocationModel& model, AllocatorState& state, const Vec6& wrench_cmd,
+                                       AllocationResult& out);
+/// Shared non-finite-command path: holds state.last_thrust_N (clamped to the current limits),
+/// latches kFaultNonFiniteCommand, returns non_finite_input.
 Status hold_allocation(const AllocationModel& model, AllocatorState& state, AllocationResult& out);
+/// Same hold for a finite command whose solution overflowed (NaN/inf inside the allocator):
+/// latches kFaultNonFiniteOutput, returns non_finite_output. The held value is always finite.
+Status hold_nonfinite_result(const AllocationModel& model, AllocatorState& state, AllocationResult& out);
 }  // namespace detail
 
 }  // namespace kestrel::allocation

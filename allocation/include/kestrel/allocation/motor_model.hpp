@@ -85,8 +85,10 @@ struct MotorModelState {
                                        const real* initial_thrust_N = nullptr);
 
 /// One update of all motors with reference thrusts `reference_thrust_N` (num_motors values).
-/// Returns ok, non_finite_input (some references were non-finite and held), or invalid_argument
-/// (dt not finite or <= 0, or a state that was never reset; nothing changed).
+/// Returns ok, non_finite_input (some references were non-finite and held), non_finite_output (a
+/// motor's new thrust overflowed, e.g. under an absurd dt: its previous thrust was kept and
+/// kFaultNonFiniteOutput latched), or invalid_argument (dt not finite or <= 0, or a state that was
+/// never reset; nothing changed).
 [[nodiscard]] Status motor_model_step(const MotorModelConfig& cfg, MotorModelState& state,
                                       const real* reference_thrust_N, real dt_s);
 

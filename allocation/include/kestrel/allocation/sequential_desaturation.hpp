@@ -51,7 +51,8 @@ struct SequentialDesaturationParams {
 
 /// Saturation bit i: motor i ended at (within 1e-5 of its range) or beyond a limit. Motors whose
 /// limits are equal (dead) are never flagged. Returns ok, non_finite_input (last output held,
-/// unallocated = 0) or invalid_argument (empty model; in a KESTREL_MAX_ROTORS=4 build, which keeps
+/// unallocated = 0), non_finite_output (a finite command so large that the solution overflowed to
+/// NaN: last finite output held, kFaultNonFiniteOutput latched, unallocated = 0) or invalid_argument (empty model; in a KESTREL_MAX_ROTORS=4 build, which keeps
 /// only the unrolled quadrotor path, also any rotor count other than 4).
 [[nodiscard]] Status allocate_sequential_desaturation(const AllocationModel& model,
                                                       const SequentialDesaturationParams& params, AllocatorState& state,

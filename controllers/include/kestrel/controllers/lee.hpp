@@ -63,8 +63,20 @@ struct LeeParams {
   real action_max = 10;
 };
 
-/// Checks a LeeParams once, when it is built: positive finite mass, finite inertia and gravity,
-/// non-negative yaw-rate limit, finite gain ranges with min <= max, action_min < action_max.
+/// Upper bounds validate_lee_params() enforces. Why: the controller multiplies gains by state errors
+/// (and mass by accelerations); with these bounds and any physically meaningful state the products
+/// stay many orders of magnitude below the float limit (3.4e38), whereas e.g. k_angvel = 1e37 at
+/// 10 rad/s overflows the allocation on every step. Generous: the presets use gains of 0.1 to ~15,
+/// masses of 0.25 to 2.4 kg.
+constexpr real kLeeMaxGain = 1e6_r;          // |every gain component|
+constexpr real kLeeMaxMassKg = 1e6_r;        // mass in (0, 1e6] kg
+constexpr real kLeeMaxInertiaKgm2 = 1e6_r;   // |every inertia entry|
+constexpr real kLeeMaxGravityMps2 = 1e3_r;   // |every gravity component|
+
+/// Checks a LeeParams once, when it is built: finite mass in (0, kLeeMaxMassKg], finite inertia
+/// entries and gravity components within kLeeMaxInertiaKgm2 / kLeeMaxGravityMps2, non-negative
+/// yaw-rate limit, finite gain ranges with min <= max and |gain| <= kLeeMaxGain,
+/// action_min < action_max.
 [[nodiscard]] Status validate_lee_params(const LeeParams& params);
 
 /// Midpoints of the ranges: the gains every instance holds before any randomisation.

@@ -16,6 +16,7 @@ enum class Status : std::uint8_t {
   capacity_exceeded,  // a fixed-capacity container or workspace is full
   singular,           // a matrix or geometry cannot be inverted / has lost rank
   not_converged,      // an iterative solver hit its iteration bound (result is still usable)
+  non_finite_output,  // finite inputs overflowed to NaN/inf inside a stage; the last safe output was held
 };
 
 const char* to_string(Status s);

@@ -51,8 +51,21 @@ typedef enum kestrel_status {
   KESTREL_NON_FINITE_INPUT = 2, /* NaN/inf in an input: the last safe output was held */
   KESTREL_CAPACITY_EXCEEDED = 3,
   KESTREL_SINGULAR = 4,
-  KESTREL_NOT_CONVERGED = 5
+  KESTREL_NOT_CONVERGED = 5,
+  KESTREL_NON_FINITE_OUTPUT = 6 /* finite inputs overflowed inside a stage (absurd magnitudes): the last
+                                   finite output was held, KESTREL_FAULT_NON_FINITE_OUTPUT latched */
 } kestrel_status;
+
+/* Largest control period kestrel_step() accepts (s). Larger steps make no sense for a control loop
+ * and overflow the motor model (around 1e16 s); they are refused with KESTREL_INVALID_ARGUMENT. */
+#define KESTREL_MAX_DT_S 1.0f
+
+/* kestrel_state.orientation_xyzw must be a unit quaternion within this tolerance:
+ * | |q| - 1 | <= KESTREL_QUAT_NORM_TOLERANCE, else kestrel_step() returns KESTREL_INVALID_ARGUMENT
+ * (a zero or unnormalised quaternion gives a meaningless rotation). An estimator that renormalises
+ * each update is far inside it. A NaN/inf component is a non-finite input instead (held output,
+ * KESTREL_NON_FINITE_INPUT). */
+#define KESTREL_QUAT_NORM_TOLERANCE 1e-3f
 
 /* Fault bits (values of the C++ kestrel::Fault), latched until kestrel_clear_faults(). */
 #define KESTREL_FAULT_NON_FINITE_COMMAND 0x001u
@@ -84,9 +97,9 @@ typedef enum kestrel_mode {
  * (kestrel_default_params() fills them from a preset). */
 typedef struct kestrel_params {
   int32_t preset;             /* kestrel_preset: airframe geometry, motor limits and motor model */
-  float mass_kg;              /* > 0 */
-  float inertia_diag_kgm2[3]; /* body-axis principal moments */
-  float k_pos[3];             /* (m/s^2) per m */
+  float mass_kg;              /* (0, 1e6] */
+  float inertia_diag_kgm2[3]; /* body-axis principal moments, |J| <= 1e6 */
+  float k_pos[3];             /* (m/s^2) per m; every gain |k| <= 1e6 (kestrel::kLeeMaxGain) */
   float k_vel[3];             /* (m/s^2) per m/s */
   float k_rot[3];             /* N m per unit attitude error */
   float k_angvel[3];          /* N m per rad/s */
@@ -98,7 +111,7 @@ typedef struct kestrel_params {
 /* The vehicle state estimate the controller reads. */
 typedef struct kestrel_state {
   float position_w[3];       /* m */
-  float orientation_xyzw[4]; /* unit quaternion, body -> world */
+  float orientation_xyzw[4]; /* unit quaternion (KESTREL_QUAT_NORM_TOLERANCE), body -> world */
   float linvel_w[3];         /* m/s */
   float angvel_b[3];         /* rad/s (gyro) */
 } kestrel_state;
@@ -129,8 +142,12 @@ kestrel_status kestrel_default_params(int32_t preset, kestrel_params* params);
 kestrel_status kestrel_init(kestrel_storage* storage, int32_t preset);
 kestrel_status kestrel_init_params(kestrel_storage* storage, const kestrel_params* params);
 
-/* One control step at a fixed period dt_s (> 0): setpoint -> wrench -> motor thrusts (-> motor
- * model). NaN in the state or the setpoint holds the last safe output (NON_FINITE_INPUT). */
+/* One control step at a fixed period dt_s (0 < dt_s <= KESTREL_MAX_DT_S): setpoint -> wrench ->
+ * motor thrusts (-> motor model). NaN in the state or the setpoint holds the last safe output
+ * (NON_FINITE_INPUT). Finite inputs so large that a stage overflows hold the last finite output
+ * (NON_FINITE_OUTPUT). For any input, every output is finite and motor_command is in [0, 1];
+ * KESTREL_OK means no stage held or replaced anything. KESTREL_INVALID_ARGUMENT (bad mode, dt_s,
+ * or non-unit quaternion) leaves the stack and `out` unchanged. */
 kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* state, const kestrel_setpoint* setpoint,
                             float dt_s, kestrel_output* out);
 

@@ -15,6 +15,7 @@
 #include "kestrel/kernel/types.hpp"
 #include "kestrel/sensors/imu.hpp"
 #include "kestrel/sensors/ray_sensor.hpp"
+#include "kestrel/sim/limits.hpp"
 
 namespace kestrel::sim {
 
@@ -239,6 +240,9 @@ struct WorldConfig {
   SimulatorConfig simulator;  // backend selection (sim/simulator.hpp)
   std::uint64_t seed = 0;
   int num_threads = 1;
+  // Set-up refuses a world whose estimated memory exceeds this (scenario `max_memory_gib`,
+  // kestrel run --max-memory-gib; see sim/limits.hpp).
+  double max_memory_gib = kDefaultMaxMemoryGiB;
 };
 
 }  // namespace kestrel::sim

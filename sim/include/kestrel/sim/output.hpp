@@ -17,6 +17,11 @@ namespace kestrel::sim {
 /// the obstacles of environment 0 outlined by their AABBs.
 [[nodiscard]] bool write_trajectory_png(const World& world, const std::string& path, std::string& error);
 
+/// Rasterises the segment (x0, y0)-(x1, y1), in pixels, into a W x H RGB buffer (row-major, 3
+/// bytes per pixel) with colour c; returns the pixels written. Any coordinates are accepted: far
+/// ones (1e12 px) are clipped in floating point first, non-finite ones draw nothing.
+std::size_t draw_line_rgb(unsigned char* rgb, int W, int H, double x0, double y0, double x1, double y1, const unsigned char c[3]);
+
 /// RGB image (W x H, row-major, 3 bytes per pixel) as an 8-bit PNG.
 [[nodiscard]] bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error);
 /// For every ray sensor of robot 0 of environment `env`: dir/sensor_<name>_range.png (lidar, or a

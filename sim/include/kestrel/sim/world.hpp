@@ -60,6 +60,10 @@ class World {
   /// Builds a world from a validated config. Returns nullptr and a message on bad parameters;
   /// nothing is half-built. Every environment is reset once (episode 0).
   static std::unique_ptr<World> create(const WorldConfig& config, std::string& error);
+  /// Bytes the world's per-environment storage will take (what bytes_per_env() x num_envs reports
+  /// once built), from the config alone: create() refuses a config above max_memory_gib with it,
+  /// before allocating. Double: a bad config's product must not wrap.
+  static double estimate_bytes(const WorldConfig& config);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
