@@ -60,6 +60,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/thread_pool.hpp"

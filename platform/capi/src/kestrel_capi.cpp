@@ -13,6 +13,7 @@
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/robots/multirotor.hpp"
 
 namespace {
 
@@ -23,17 +24,10 @@ constexpr std::uint32_t kMagic = 0x4b455354u;  // "KEST": the storage holds an i
 
 struct CapiStack {
   std::uint32_t magic;
-  bool use_motor_model;
-  ControllerParams ctrl;
-  ControllerState ctrl_state;
-  al::Airframe airframe;
-  al::MotorHealth health;
-  al::AllocationModel model;
-  al::AllocatorState alloc_state;
-  al::SequentialDesaturationParams desat;
-  al::AllocationResult alloc_out;
-  al::MotorModelConfig motor_cfg;
-  al::MotorModelState motors;
+  robots::MultirotorModel mr;   // the core chain (robots/multirotor.hpp): Lee, airframe, allocation, motors
+  robots::MultirotorState st;   // controller, allocator and motor state
+  robots::MultirotorOutput out; // last controller wrench and thrust setpoints
+  al::MotorHealth health;       // what the allocation model was last built with
 };
 static_assert(sizeof(CapiStack) <= KESTREL_STORAGE_BYTES, "raise KESTREL_STORAGE_BYTES in kestrel.h");
 static_assert(alignof(CapiStack) <= alignof(kestrel_storage), "kestrel_storage is under-aligned");
@@ -77,10 +71,10 @@ Vec3 vec3(const float* v) { return Vec3(static_cast<real>(v[0]), static_cast<rea
 // motor's lower limit if even that is not), a non-finite wrench with zero. Cold: never runs unless
 // a stage broke its contract.
 __attribute__((noinline, cold)) void repair_outputs(CapiStack* s, kestrel_output* out) {
-  const int n = s->model.num_rotors;
+  const int n = s->mr.allocation.num_rotors;
   for (int i = 0; i < n; ++i) {
-    const real lo = s->airframe.thrust_min_N[i], hi = s->airframe.thrust_max_N[i];
-    real f = s->alloc_state.last_thrust_N[i];
+    const real lo = s->mr.airframe.thrust_min_N[i], hi = s->mr.airframe.thrust_max_N[i];
+    real f = s->st.allocator.last_thrust_N[i];
     if (!is_finite(f)) f = lo;
     const float cmd = out->motor_command[i];
     if (!(cmd >= 0.0f && cmd <= 1.0f)) out->motor_command[i] = static_cast<float>(hi > lo ? clamp((f - lo) / (hi - lo), 0_r, 1_r) : 0_r);
@@ -90,7 +84,7 @@ __attribute__((noinline, cold)) void repair_outputs(CapiStack* s, kestrel_output
   for (int i = 0; i < 6; ++i) {
     if (!is_finite(static_cast<real>(out->wrench_b[i]))) out->wrench_b[i] = 0.0f;
   }
-  s->alloc_state.faults.raise(kFaultNonFiniteOutput);
+  s->st.allocator.faults.raise(kFaultNonFiniteOutput);
 }
 
 }  // namespace
@@ -141,7 +135,7 @@ kestrel_status kestrel_init_params(kestrel_storage* storage, const kestrel_param
   CapiStack* s = new (storage->u.bytes) CapiStack();  // value-initialised; magic 0 until the end
   const auto preset = static_cast<al::AirframePreset>(p->preset);
 
-  LeeParams& lee = s->ctrl.lee;
+  LeeParams& lee = s->mr.ctrl.lee;
   lee = lee_params_base_quadrotor();
   lee.mass_kg = static_cast<real>(p->mass_kg);
   lee.inertia_b = Mat3::Zero();
@@ -156,20 +150,23 @@ kestrel_status kestrel_init_params(kestrel_storage* storage, const kestrel_param
   lee.randomize_gains = false;
   lee.max_yaw_rate_radps = static_cast<real>(p->max_yaw_rate_radps);
   if (const Status st = validate_lee_params(lee); st != Status::ok) return to_c(st);
-  controller_reset(ControllerKind::lee_position, s->ctrl, s->ctrl_state);
+  controller_reset(ControllerKind::lee_position, s->mr.ctrl, s->st.ctrl);
 
   if (!is_finite(static_cast<real>(p->yaw_headroom)) || p->yaw_headroom < 0) return KESTREL_INVALID_ARGUMENT;
-  s->desat.yaw_headroom = static_cast<real>(p->yaw_headroom);
-  if (const Status st = al::make_airframe(al::airframe_spec(preset), s->airframe); st != Status::ok) return to_c(st);
+  s->mr.desat.yaw_headroom = static_cast<real>(p->yaw_headroom);
+  if (const Status st = al::make_airframe(al::airframe_spec(preset), s->mr.airframe); st != Status::ok) return to_c(st);
   // Flat multirotors have rank 4 (no lateral force): Status::singular is expected and harmless.
-  const Status am = al::build_allocation_model(s->airframe, s->health, s->model);
+  const Status am = al::build_allocation_model(s->mr.airframe, s->health, s->mr.allocation);
   if (am != Status::ok && am != Status::singular) return to_c(am);
-  al::reset_allocator(s->alloc_state);
-  s->motor_cfg = al::motor_model_preset(preset);
+  al::reset_allocator(s->st.allocator);
+  s->mr.motors = al::motor_model_preset(preset);
   RngStream rng(1, 0, kPurposeMotors);
   const real idle[al::kMaxRotors] = {};
-  if (const Status st = al::motor_model_reset(s->motor_cfg, s->motors, rng, idle); st != Status::ok) return to_c(st);
-  s->use_motor_model = p->use_motor_model != 0;
+  if (const Status st = al::motor_model_reset(s->mr.motors, s->st.motors, rng, idle); st != Status::ok) return to_c(st);
+  s->mr.use_motor_model = p->use_motor_model != 0;
+  s->mr.controller = ControllerKind::lee_position;  // the default mode; kestrel_step picks per call
+  s->mr.allocator = robots::AllocatorKind::sequential_desaturation;
+  if (const Status st = robots::finish_multirotor_model(s->mr); st != Status::ok) return to_c(st);
   s->magic = kMagic;
   return KESTREL_OK;
 }
@@ -205,16 +202,13 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
   const real action[4] = {static_cast<real>(sp->value[0]), static_cast<real>(sp->value[1]),
                           static_cast<real>(sp->value[2]), static_cast<real>(sp->value[3])};
 
-  ControllerOutput co;
-  Status worst = update_controller(static_cast<ControllerKind>(m), s->ctrl, s->ctrl_state, body, action, 4, co);
-  // A rejected (non-finite) input still yields the held safe wrench, which is allocated as usual.
-  const Status sa = al::allocate_sequential_desaturation(s->model, s->desat, s->alloc_state, co.wrench_b, s->alloc_out);
+  // The core chain with the mode's controller; a rejected (non-finite) input still yields the held
+  // safe wrench, which is allocated as usual. First non-ok status of the stages.
+  const ControllerKind kind = static_cast<ControllerKind>(m);
+  Status worst = robots::multirotor_control(s->mr, kind, s->st, body, action, 4, s->out.command);
+  const Status sa = robots::multirotor_actuate(s->mr, s->st, static_cast<real>(dt_s), s->out);
   if (worst == Status::ok) worst = sa;
-  const int n = s->model.num_rotors;
-  if (s->use_motor_model) {
-    const Status sm = al::motor_model_step(s->motor_cfg, s->motors, s->alloc_out.thrust_N, static_cast<real>(dt_s));
-    if (worst == Status::ok) worst = sm;
-  }
+  const int n = s->mr.allocation.num_rotors;
 
   out->num_motors = n;
   for (int i = 0; i < KESTREL_MAX_MOTORS; ++i) {
@@ -225,13 +219,13 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
       continue;
     }
     // Normalised against the airframe's nominal range: a weak motor's 1.0 stays its full throttle.
-    const real lo = s->airframe.thrust_min_N[i], hi = s->airframe.thrust_max_N[i];
-    const real f = s->alloc_out.thrust_N[i];
+    const real lo = s->mr.airframe.thrust_min_N[i], hi = s->mr.airframe.thrust_max_N[i];
+    const real f = s->out.allocation.thrust_N[i];
     out->motor_command[i] = static_cast<float>(hi > lo ? clamp((f - lo) / (hi - lo), 0_r, 1_r) : 0_r);
     out->thrust_setpoint_N[i] = static_cast<float>(f);
-    out->thrust_N[i] = static_cast<float>(s->use_motor_model ? s->motors.thrust_N[i] : f);
+    out->thrust_N[i] = static_cast<float>(s->mr.use_motor_model ? s->st.motors.thrust_N[i] : f);
   }
-  const Vec6 w = co.wrench_b.as_vec6();
+  const Vec6 w = s->out.command.wrench_b.as_vec6();
   for (int i = 0; i < 6; ++i) out->wrench_b[i] = static_cast<float>(w[i]);
   // The contract of this API: every output finite, motor_command in [0, 1], whatever the input.
   // The stages guarantee it themselves; checked here once more (branch-free probe: v * 0 is +-0
@@ -248,7 +242,7 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
     repair_outputs(s, out);
     if (worst == Status::ok) worst = Status::non_finite_output;
   }
-  out->saturated_mask = s->alloc_out.saturated_mask();
+  out->saturated_mask = s->out.allocation.saturated_mask();
   out->faults = kestrel_faults(storage);
   return to_c(worst);
 }
@@ -257,27 +251,27 @@ uint32_t kestrel_faults(const kestrel_storage* storage) {
   const CapiStack* s = stack_of(storage);
   if (s == nullptr) return 0;
   // The model's kFaultSingular is the rank deficiency of a flat frame, not a fault.
-  return s->ctrl_state.lee.faults.bits | s->alloc_state.faults.bits | s->motors.faults.bits |
-         (s->model.faults.bits & ~static_cast<std::uint32_t>(kFaultSingular));
+  return s->st.ctrl.lee.faults.bits | s->st.allocator.faults.bits | s->st.motors.faults.bits |
+         (s->mr.allocation.faults.bits & ~static_cast<std::uint32_t>(kFaultSingular));
 }
 
 void kestrel_clear_faults(kestrel_storage* storage) {
   CapiStack* s = stack_of(storage);
   if (s == nullptr) return;
-  s->ctrl_state.lee.faults.clear();
-  s->alloc_state.faults.clear();
-  s->motors.faults.clear();
+  s->st.ctrl.lee.faults.clear();
+  s->st.allocator.faults.clear();
+  s->st.motors.faults.clear();
 }
 
 kestrel_status kestrel_inject_motor_failure(kestrel_storage* storage, std::int32_t motor, float thrust_scale) {
   CapiStack* s = stack_of(storage);
-  if (s == nullptr || motor < 0 || motor >= s->model.num_rotors || !(thrust_scale >= 0.0f) || !(thrust_scale <= 1.0f)) {
+  if (s == nullptr || motor < 0 || motor >= s->mr.allocation.num_rotors || !(thrust_scale >= 0.0f) || !(thrust_scale <= 1.0f)) {
     return KESTREL_INVALID_ARGUMENT;
   }
   const real scale = static_cast<real>(thrust_scale);
-  if (const Status st = al::inject_motor_failure(s->motors, motor, scale); st != Status::ok) return to_c(st);
+  if (const Status st = al::inject_motor_failure(s->st.motors, motor, scale); st != Status::ok) return to_c(st);
   s->health.thrust_scale[motor] = scale;
-  const Status am = al::build_allocation_model(s->airframe, s->health, s->model);
+  const Status am = al::build_allocation_model(s->mr.airframe, s->health, s->mr.allocation);
   return am == Status::singular ? KESTREL_OK : to_c(am);
 }
 

@@ -245,4 +245,9 @@ struct WorldConfig {
   double max_memory_gib = kDefaultMaxMemoryGiB;
 };
 
+/// Robots per asset link: a tree is a trunk and this many branches (one obstacle slot each).
+constexpr int kTreeBranches = 3;
+/// Obstacle slots an asset class needs at most (scene layout of every backend).
+int asset_class_slots(const AssetClass& c);
+
 }  // namespace kestrel::sim

@@ -28,6 +28,7 @@
 #include "kestrel/robots/multirotor.hpp"
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/config.hpp"
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/summary.hpp"
 #include "kestrel/sim/thread_pool.hpp"
 #include "kestrel/sensors/imu.hpp"
@@ -298,9 +299,5 @@ class World {
   bool batch_ = false;
 };
 
-/// Robots per asset link: a tree is a trunk and this many branches (one obstacle slot each).
-constexpr int kTreeBranches = 3;
-/// Obstacle slots an asset class needs at most.
-int asset_class_slots(const AssetClass& c);
 
 }  // namespace kestrel::sim
