@@ -1,0 +1,191 @@
+"""Export a trained actor to the core's policy network (policy/mlp.hpp) and to ONNX.
+
+The core evaluates ``MlpParams<obs, h1, h2, act>``: observation normalisation
+``clamp((obs - mean) * inv_std, -clip, clip)``, two hidden layers with one activation (tanh, ELU
+or ReLU), an output layer (the Gaussian's mean: the deterministic action), then
+``offset + scale * clamp(y, low, high)``. :class:`MlpSpec` holds exactly that, in float32, and is
+built from a Stable-Baselines3 PPO model (with its VecNormalize) or an rsl_rl runner.
+
+``write_header`` writes a C++ header with every number as a hex-float literal (exact: the header
+reproduces the float32 weights bit for bit), for firmware to keep in flash.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+ACTIVATIONS = {"tanh": 0, "elu": 1, "relu": 2}
+
+
+@dataclasses.dataclass
+class MlpSpec:
+    activation: str                 # "tanh", "elu" or "relu"
+    weights: list                   # [W1 (h1 x obs), W2 (h2 x h1), W3 (act x h2)] float32
+    biases: list                    # [b1, b2, b3]
+    obs_mean: np.ndarray
+    obs_inv_std: np.ndarray
+    obs_clip: float
+    action_low: np.ndarray
+    action_high: np.ndarray
+    action_scale: np.ndarray
+    action_offset: np.ndarray
+
+    def __post_init__(self):
+        if self.activation not in ACTIVATIONS:
+            raise ValueError(f"activation: expected one of {sorted(ACTIVATIONS)}, got {self.activation!r}")
+        if len(self.weights) != 3 or len(self.biases) != 3:
+            raise ValueError("weights/biases: expected two hidden layers and an output layer (3 each)")
+        f32 = lambda a: np.ascontiguousarray(np.asarray(a, dtype=np.float32))
+        self.weights = [f32(w) for w in self.weights]
+        self.biases = [f32(b) for b in self.biases]
+        for name in ("obs_mean", "obs_inv_std", "action_low", "action_high", "action_scale", "action_offset"):
+            setattr(self, name, f32(getattr(self, name)))
+        w1, w2, w3 = self.weights
+        if w2.shape[1] != w1.shape[0] or w3.shape[1] != w2.shape[0]:
+            raise ValueError(f"weights: layer shapes do not chain: {[w.shape for w in self.weights]}")
+        if self.obs_mean.shape != (self.obs_dim,) or self.obs_inv_std.shape != (self.obs_dim,):
+            raise ValueError(f"obs_mean/obs_inv_std: expected shape ({self.obs_dim},)")
+        for name in ("action_low", "action_high", "action_scale", "action_offset"):
+            if getattr(self, name).shape != (self.action_dim,):
+                raise ValueError(f"{name}: expected shape ({self.action_dim},)")
+
+    @property
+    def obs_dim(self) -> int:
+        return int(self.weights[0].shape[1])
+
+    @property
+    def hidden(self) -> tuple:
+        return int(self.weights[0].shape[0]), int(self.weights[1].shape[0])
+
+    @property
+    def action_dim(self) -> int:
+        return int(self.weights[2].shape[0])
+
+    def core_arrays(self) -> dict:
+        """The arrays kestrel._core.mlp_forward takes (float32, C order)."""
+        return dict(activation=ACTIVATIONS[self.activation], w1=self.weights[0], b1=self.biases[0],
+                    w2=self.weights[1], b2=self.biases[1], w3=self.weights[2], b3=self.biases[2],
+                    obs_mean=self.obs_mean, obs_inv_std=self.obs_inv_std, obs_clip=float(self.obs_clip),
+                    action_low=self.action_low, action_high=self.action_high,
+                    action_scale=self.action_scale, action_offset=self.action_offset)
+
+    def torch_module(self):
+        """The same function as a torch module (float32): the reference for parity and for ONNX."""
+        import torch
+
+        spec = self
+
+        class Actor(torch.nn.Module):
+            def __init__(self):
+                super().__init__()
+                self.register_buffer("mean", torch.from_numpy(spec.obs_mean.copy()))
+                self.register_buffer("inv_std", torch.from_numpy(spec.obs_inv_std.copy()))
+                self.register_buffer("low", torch.from_numpy(spec.action_low.copy()))
+                self.register_buffer("high", torch.from_numpy(spec.action_high.copy()))
+                self.register_buffer("scale", torch.from_numpy(spec.action_scale.copy()))
+                self.register_buffer("offset", torch.from_numpy(spec.action_offset.copy()))
+                self.clip = float(spec.obs_clip)
+                layers = []
+                for w, b in zip(spec.weights, spec.biases):
+                    lin = torch.nn.Linear(w.shape[1], w.shape[0])
+                    with torch.no_grad():
+                        lin.weight.copy_(torch.from_numpy(w))
+                        lin.bias.copy_(torch.from_numpy(b))
+                    layers.append(lin)
+                self.l1, self.l2, self.l3 = layers
+                self.act = {"tanh": torch.nn.Tanh(), "elu": torch.nn.ELU(), "relu": torch.nn.ReLU()}[spec.activation]
+
+            def forward(self, obs):
+                x = torch.clamp((obs - self.mean) * self.inv_std, -self.clip, self.clip)
+                y = self.l3(self.act(self.l2(self.act(self.l1(x)))))
+                return self.offset + self.scale * torch.minimum(torch.maximum(y, self.low), self.high)
+
+        return Actor().eval()
+
+
+def from_sb3(model, vec_normalize=None) -> MlpSpec:
+    """A Stable-Baselines3 PPO/A2C model with a Box action space (and its VecNormalize, if any)."""
+    import torch
+
+    policy = model.policy
+    linears = [m for m in policy.mlp_extractor.policy_net if isinstance(m, torch.nn.Linear)]
+    if len(linears) != 2 or not isinstance(policy.action_net, torch.nn.Linear):
+        raise ValueError("model: expected net_arch with two hidden layers for the actor, e.g. [64, 64]")
+    act_fn = policy.activation_fn
+    name = {torch.nn.Tanh: "tanh", torch.nn.ELU: "elu", torch.nn.ReLU: "relu"}.get(act_fn)
+    if name is None:
+        raise ValueError(f"model: activation {act_fn} has no core equivalent (tanh, elu, relu)")
+    layers = linears + [policy.action_net]
+    obs_dim = layers[0].in_features
+    if vec_normalize is not None and vec_normalize.norm_obs:
+        rms = vec_normalize.obs_rms
+        mean = np.asarray(rms.mean, dtype=np.float64)
+        inv_std = 1.0 / np.sqrt(np.asarray(rms.var, dtype=np.float64) + vec_normalize.epsilon)
+        clip = float(vec_normalize.clip_obs)
+    else:
+        mean, inv_std, clip = np.zeros(obs_dim), np.ones(obs_dim), 3.0e38
+    space = model.action_space
+    return MlpSpec(activation=name,
+                   weights=[l.weight.detach().cpu().numpy() for l in layers],
+                   biases=[l.bias.detach().cpu().numpy() for l in layers],
+                   obs_mean=mean, obs_inv_std=inv_std, obs_clip=clip,
+                   action_low=space.low, action_high=space.high,
+                   action_scale=np.ones(space.shape), action_offset=np.zeros(space.shape))
+
+
+def _hex(v) -> str:
+    v = float(np.float32(v))
+    if math.isinf(v):
+        raise ValueError("non-finite value in the network")
+    return float.hex(v)
+
+
+def write_header(spec: MlpSpec, path: str, name: str = "kPolicy", namespace: str = "kestrel::policy::generated") -> str:
+    """C++ header defining `inline constexpr MlpParams<...> name` with hex-float literals."""
+    h1, h2 = spec.hidden
+    arr = lambda a: "{" + ", ".join(_hex(x) for x in np.asarray(a).ravel()) + "}"
+    mat = lambda w: "{" + ", ".join(arr(row) for row in w) + "}"
+    layer = lambda w, b: "{" + mat(w) + ", " + arr(b) + "}"
+    clip = min(float(spec.obs_clip), 3.0e38)
+    t = f"MlpParams<{spec.obs_dim}, {h1}, {h2}, {spec.action_dim}>"
+    text = f"""// Generated by python/kestrel/export.py (write_header): a trained actor as core code. Every
+// number is the float32 weight written exactly as a hex-float literal. Do not edit.
+#pragma once
+
+#include "kestrel/policy/mlp.hpp"
+
+namespace {namespace} {{
+
+using {name}Type = kestrel::policy::{t};
+inline constexpr {name}Type {name} = {{
+    kestrel::policy::Activation::{spec.activation},
+    {arr(spec.obs_mean)},
+    {arr(spec.obs_inv_std)},
+    {_hex(clip)},
+    {layer(spec.weights[0], spec.biases[0])},
+    {layer(spec.weights[1], spec.biases[1])},
+    {layer(spec.weights[2], spec.biases[2])},
+    {arr(spec.action_low)},
+    {arr(spec.action_high)},
+    {arr(spec.action_scale)},
+    {arr(spec.action_offset)},
+}};
+
+}}  // namespace {namespace}
+"""
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def export_onnx(spec: MlpSpec, path: str) -> str:
+    """The same function as an ONNX graph (torch's exporter; needs the `onnx` package)."""
+    import torch
+
+    module = spec.torch_module()
+    dummy = torch.zeros(1, spec.obs_dim, dtype=torch.float32)
+    torch.onnx.export(module, (dummy,), path, input_names=["obs"], output_names=["action"],
+                      dynamic_axes={"obs": {0: "batch"}, "action": {0: "batch"}}, dynamo=False)
+    return path
