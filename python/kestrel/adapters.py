@@ -36,9 +36,12 @@ class RslRlVecEnv:
 
 
 class _RslRlImpl:
-    def __init__(self, env: KestrelVectorEnv, device: str = "cpu"):
+    def __init__(self, env: KestrelVectorEnv, device: str = "cpu", reward_scale: float = 1.0):
         import torch
 
+        # rsl_rl has no value normalisation: the position setpoint reward (up to ~30 per step,
+        # returns in the thousands) needs scaling, or the value loss dominates the clipped gradient.
+        self.reward_scale = float(reward_scale)
         self._torch = torch
         self.env = env
         self.num_envs = env.num_envs
@@ -77,7 +80,10 @@ class _RslRlImpl:
         s = info.get("success")
         if s is not None and dones.any():
             extras["log"]["/success_rate"] = float(s[dones].mean())
-        return self._obs(obs), torch.from_numpy(rew.copy()), d.long(), extras
+        r = torch.from_numpy(rew.copy())
+        if self.reward_scale != 1.0:
+            r.mul_(self.reward_scale)
+        return self._obs(obs), r, d.long(), extras
 
 
 class Sb3VecEnv:

@@ -130,7 +130,7 @@ class Learner:
 
             from .adapters import RslRlVecEnv
 
-            self.venv = RslRlVecEnv(env)
+            self.venv = RslRlVecEnv(env, reward_scale=args.reward_scale)
             with contextlib.redirect_stdout(io.StringIO()):
                 self.runner = OnPolicyRunner(self.venv, _rsl_rl_cfg(args), log_dir=None, device="cpu")
             self.steps_per_iter = args.rollout * env.num_envs
@@ -231,7 +231,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--steps", type=int, default=20_000_000, help="env-steps to train at most")
     p.add_argument("--out", default="runs/kestrel")
     p.add_argument("--threads", type=int, default=None, help="simulator threads (default: every core)")
-    p.add_argument("--torch-threads", type=int, default=os.cpu_count() or 1)
+    p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1: small MLPs gain nothing from more, and OpenMP threads spin against the simulator's)")
     p.add_argument("--eval-every", type=int, default=2_000_000, help="env-steps between evaluations")
     p.add_argument("--eval-episodes", type=int, default=1024)
     p.add_argument("--eval-seed", type=int, default=1_000_003, help="seed of the evaluation env (unseen in training)")
@@ -243,6 +243,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--gamma", type=float, default=0.99)
     p.add_argument("--entropy", type=float, default=0.0)
     p.add_argument("--init-std", type=float, default=1.0)
+    p.add_argument("--reward-scale", type=float, default=0.02, help="rsl_rl: rewards times this (no value normalisation there)")
     p.add_argument("--episode-len", type=int, default=None, help="override task.episode_len_env_steps")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
@@ -258,10 +259,21 @@ def main(argv: list[str] | None = None) -> dict:
     t_train = 0.0
     done_steps = 0
 
+    log_f = open(os.path.join(args.out, "log.csv"), "w", newline="")
+    log_w = None
+
     def eval_row() -> dict:
+        nonlocal log_w
+        t0 = time.perf_counter()
         res = evaluate(learner.policy(), args.task, args.eval_episodes, args.eval_seed, args.threads, **overrides)
-        row = {"env_steps": done_steps, "train_s": round(t_train, 3), "sim_s": round(timer.sim_s, 3), **asdict(res)}
+        row = {"env_steps": done_steps, "train_s": round(t_train, 3), "sim_s": round(timer.sim_s, 3), **asdict(res),
+               "eval_s": round(time.perf_counter() - t0, 3)}
         rows.append(row)
+        if log_w is None:
+            log_w = csv.DictWriter(log_f, fieldnames=list(row.keys()))
+            log_w.writeheader()
+        log_w.writerow(row)
+        log_f.flush()
         return row
 
     from tqdm import tqdm
@@ -285,10 +297,7 @@ def main(argv: list[str] | None = None) -> dict:
             break
     bar.close()
 
-    with open(os.path.join(args.out, "log.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    log_f.close()
     plot(rows, os.path.join(args.out, "curves.png"),
          f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,

@@ -43,7 +43,12 @@ import kestrel
 GYM_IDS: dict[str, tuple[str, dict]] = {
     # Aerial Gym's position_setpoint_task through Lee velocity control: [vx, vy, vz] (m/s, vehicle
     # frame) and yaw rate (rad/s); the fastest of the three action spaces to train here.
-    "Kestrel-PositionSetpoint-v0": ("position_setpoint_task", {"controller": "lee_velocity_control"}),
+    # Start yaw in +-pi/6 as Aerial Gym's base quadrotor (the registered robot draws it in +-pi).
+    "Kestrel-PositionSetpoint-v0": ("position_setpoint_task", {"controller": "lee_velocity_control",
+                                                               "robot": {"name": "base_quadrotor", "max_init_yaw_rad": 0.5235988}}),
+    # ... through Lee position control with setpoints relative to the robot (world frame): the
+    # easiest action space (the scripted policy is action = obs[0:3]); the training test uses it.
+    "Kestrel-PositionSetpointPosition-v0": ("position_setpoint_task", {"controller": "lee_position_control"}),
     # ... through Aerial Gym's shipped lee_attitude_control: [thrust, roll, pitch, yaw_rate].
     "Kestrel-PositionSetpointAttitude-v0": ("position_setpoint_task", {"controller": "lee_attitude_control"}),
     # ... with direct motor commands (end-to-end).
