@@ -141,12 +141,13 @@ class KestrelVectorEnv(VectorEnv):
         return self._obs, {}
 
     def step(self, actions):
-        self.task.step(actions)
+        any_ended = self.task.step(actions)
         if self._pending:  # next_step mode: the envs that ended last step start their episode now
             self.task.reset_idx(self._pending)
             self._pending = []
+            any_ended = bool(self._terminated.any() or self._truncated.any())
         term, trunc = self._terminated, self._truncated
-        if not (term.any() or trunc.any()):
+        if not any_ended:
             return self._obs, self._rewards, term, trunc, {}
         ended = self._ended
         np.logical_or(term, trunc, out=ended)

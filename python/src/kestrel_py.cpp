@@ -345,11 +345,19 @@ NB_MODULE(_core, m) {
           "step",
           [](KTask& p, nb::handle actions) {
             const float* a = checked_actions<float>(actions, p.n(), p.ad(), "actions");
-            nb::gil_scoped_release release;
-            p.t().step(a);
+            bool ended = false;
+            {
+              nb::gil_scoped_release release;
+              p.t().step(a);
+              const std::uint8_t* te = p.t().terminations();
+              const std::uint8_t* tr = p.t().truncations();
+              for (std::size_t i = 0; i < p.n(); ++i) ended = ended || te[i] != 0 || tr[i] != 0;
+            }
+            return ended;
           },
           "actions"_a,
-          "One task step; actions: C-contiguous float32 (num_envs, action_dim), read in place. The GIL is released.")
+          "One task step; actions: C-contiguous float32 (num_envs, action_dim), read in place. The GIL is released.\n"
+          "Returns True if any environment's episode ended in this step (terminated or truncated).")
       .def(
           "step_n",
           [](KTask& p, nb::handle actions, long long n) {
