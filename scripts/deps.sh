@@ -19,3 +19,32 @@ if [ -n "$missing" ]; then
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends $missing
 fi
+
+# The Python side (python/, `pip install .`): a virtual environment of the project's, .venv/, with
+# the pinned packages of python/requirements.txt (torch==2.13.0 first: a CPU build; a plain or newer
+# torch would download a CUDA build of several GB). Skipped when the stamp (hash of the requirements
+# and the interpreter) is current, so a second run costs nothing.
+KESTREL_ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+VENV="$KESTREL_ROOT/.venv"
+REQ="$KESTREL_ROOT/python/requirements.txt"
+PY="${KESTREL_PYTHON:-python3}"
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "kestrel: creating $VENV with $($PY --version 2>&1)"
+  if ! "$PY" -m venv "$VENV"; then
+    # Debian's own python3 needs python3-venv for ensurepip (a pyenv python3 has it built in).
+    SUDO=""
+    if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends python3-venv
+    rm -rf "$VENV"
+    "$PY" -m venv "$VENV"
+  fi
+fi
+stamp="$VENV/.kestrel-requirements"
+want="$( (cat "$REQ"; "$VENV/bin/python" --version) | sha256sum | cut -d' ' -f1)"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  echo "kestrel: installing the pinned Python packages ($REQ) into $VENV"
+  "$VENV/bin/python" -m pip install -q --disable-pip-version-check "$(grep '^torch==' "$REQ")"
+  "$VENV/bin/python" -m pip install -q --disable-pip-version-check -r "$REQ"
+  echo "$want" > "$stamp"
+fi

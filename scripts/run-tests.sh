@@ -1,7 +1,9 @@
 #!/bin/sh
 # Builds and runs every test: the host tests (GoogleTest), the same core tests and the firmware
 # example on the emulated Cortex-M4F under QEMU (run from the host ctest), and the host tests
-# again under AddressSanitizer + UBSan. Installs missing Debian packages first.
+# again under AddressSanitizer + UBSan, then the Python package (python/: built into .venv/ with
+# pip, build tree cached in build/python/) and its tests (pytest python/tests). Installs missing
+# Debian packages and the pinned Python packages first.
 set -eu
 cd "$(dirname "$0")/.."
 ./scripts/deps.sh
@@ -16,4 +18,9 @@ echo "== host with AddressSanitizer + UBSan"
 cmake --preset host-asan
 cmake --build --preset host-asan -j "$jobs"
 ctest --preset host-asan -j "$jobs"
+echo "== Python"
+# Non-editable install of the package (scikit-build-core: build/python/, incremental), then pytest.
+# The determinism test compares with the CLI built above (build/host/sim/kestrel).
+CMAKE_BUILD_PARALLEL_LEVEL="$jobs" .venv/bin/python -m pip install -q --disable-pip-version-check --no-build-isolation .
+.venv/bin/python -m pytest -q python/tests
 echo "== all tests passed"

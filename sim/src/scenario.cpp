@@ -323,7 +323,8 @@ void parse_env(const YAML::Node& n, EnvConfig& e, const std::string& dir, const 
 
 void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& where, const std::string& dir) {
   check_keys(n, where, {"robots_per_env", "mass_kg", "inertia_diag_kg_m2", "airframe", "collision_shape", "use_desaturation",
-                        "linear_drag_b", "quadratic_drag_b", "angular_drag_b", "quadratic_angular_drag_b", "file", "urdf"});
+                        "linear_drag_b", "quadratic_drag_b", "angular_drag_b", "quadratic_angular_drag_b", "file", "urdf",
+                        "max_init_yaw_rad"});
   if (!n.IsMap()) return;
   if (n["urdf"]) {
     // Mass, inertia, collision shape and rotors from a URDF (sim/urdf.hpp); the fields below override it.
@@ -333,6 +334,8 @@ void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& whe
   if (n["robots_per_env"]) r.robots_per_env = get_int(n["robots_per_env"], where + ".robots_per_env", 1, kMaxRobotsPerEnv, "kMaxRobotsPerEnv");
   if (n["mass_kg"]) r.mass_kg = get_real(n["mass_kg"], where + ".mass_kg", 1e-6, 1e6);
   if (n["inertia_diag_kg_m2"]) r.inertia_diag_kg_m2 = get_vec3(n["inertia_diag_kg_m2"], where + ".inertia_diag_kg_m2");
+  // Start yaw drawn in [-max, max] (Aerial Gym's base quadrotor: pi/6; the registered default: pi).
+  if (n["max_init_yaw_rad"]) r.max_init_yaw_rad = get_real(n["max_init_yaw_rad"], where + ".max_init_yaw_rad", 0, 3.14159265358979);
   if (n["use_desaturation"]) r.use_desaturation = get_bool(n["use_desaturation"], where + ".use_desaturation");
   if (n["linear_drag_b"]) r.linear_drag_b = get_vec3(n["linear_drag_b"], where + ".linear_drag_b");
   if (n["quadratic_drag_b"]) r.quadratic_drag_b = get_vec3(n["quadratic_drag_b"], where + ".quadratic_drag_b");

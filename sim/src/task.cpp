@@ -44,6 +44,18 @@ Task::Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim)
   truncations_.assign(n, 0);
 }
 
+void Task::set_keep_final_observations(bool on) {
+  if (on) final_obs_.assign(obs_.size(), 0.0f);
+  else std::vector<float>().swap(final_obs_);
+}
+
+void Task::keep_final_obs(int env) {
+  if (final_obs_.empty()) return;
+  write_obs(env);
+  const std::size_t row = static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_);
+  std::memcpy(&final_obs_[row], &obs_[row], static_cast<std::size_t>(obs_dim_) * sizeof(float));
+}
+
 const char* Task::backend_name() const { return sim_ ? sim_->backend_name() : "rigid"; }
 int Task::num_threads() const { return sim_ ? sim_->num_threads() : world_->num_threads(); }
 std::uint64_t Task::state_hash() const { return sim_ ? sim_->state_hash() : world_->state_hash(); }
@@ -189,6 +201,7 @@ class PositionSetpointTask final : public Task {
         }
         infos_.episode_reward_sum += episode_reward_[static_cast<std::size_t>(env)];
         episode_reward_[static_cast<std::size_t>(env)] = 0;
+        keep_final_obs(env);
         world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
       }
       write_obs(env);
@@ -217,7 +230,7 @@ class PositionSetpointTask final : public Task {
 
   // Aerial Gym process_obs_for_task: [target - position, quaternion xyzw, body linvel, body angvel].
   // (policy/observations.hpp: the same builder the firmware uses.)
-  void write_obs(int env) {
+  void write_obs(int env) override {
     policy::position_setpoint_observation(world_->robot_state(env, 0), world_->target(env, 0),
                                           &obs_[static_cast<std::size_t>(env) * kPsObsDim]);
   }

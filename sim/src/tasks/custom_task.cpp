@@ -369,6 +369,7 @@ class CustomTask final : public Task, public CustomTaskView {
       episode_reward_[i] += static_cast<double>(r);
       if (why != 0) {
         custom_terms::count_episode(why, episode_reward_[i], infos_);
+        keep_final_obs(env);
         reset_env_and_objects(env);  // auto-reset: the row below is the new episode's first observation
       }
       write_obs(env);
@@ -433,7 +434,7 @@ class CustomTask final : public Task, public CustomTaskView {
     write_obs(env);
   }
 
-  void write_obs(int env) {
+  void write_obs(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
     const task_access::RobotView r = task_access::robot(*world_, env);
     custom_terms::ObsInput in;

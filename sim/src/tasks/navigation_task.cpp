@@ -205,6 +205,7 @@ class NavigationTask final : public Task {
     if (book_.update_curriculum(p_.curriculum, infos_)) apply_level();
     for (int env = 0; env < num_envs_; ++env) {
       if (ended_[static_cast<std::size_t>(env)]) {
+        keep_final_obs(env);
         world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
         clear_memory(env);
       }
@@ -260,7 +261,7 @@ class NavigationTask final : public Task {
     write_obs(env);
   }
 
-  void write_obs(int env) {
+  void write_obs(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
     float* o = &obs_[i * static_cast<std::size_t>(obs_dim_)];
     const task_access::RobotView r = task_access::robot(*world_, env);

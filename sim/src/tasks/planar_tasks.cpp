@@ -103,6 +103,7 @@ class PlanarTaskBase : public Task {
     int n = 0;
     for (int env = 0; env < num_envs_; ++env)
       if (ended_[static_cast<std::size_t>(env)]) reset_ids_[static_cast<std::size_t>(n++)] = env;
+    for (int k = 0; k < n; ++k) keep_final_obs(reset_ids_[static_cast<std::size_t>(k)]);  // before the reset
     if (n > 0) sim_->reset_idx(reset_ids_.data(), n);
     for (int k = 0; k < n; ++k) {
       const int env = reset_ids_[static_cast<std::size_t>(k)];
@@ -140,7 +141,6 @@ class PlanarTaskBase : public Task {
   }
 
   virtual void on_reset(int env) = 0;
-  virtual void write_obs(int env) = 0;
 
   int len_ = 0;
   std::vector<int> episode_step_;

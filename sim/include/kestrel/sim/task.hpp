@@ -74,6 +74,14 @@ class Task {
   const std::uint8_t* truncations() const { return truncations_.data(); }
   const TaskInfos& infos() const { return infos_; }
 
+  /// Final observations (gymnasium's same-step autoreset `final_obs`): off by default; once on,
+  /// every step() writes, for each environment whose episode ended in that step, the observation
+  /// of the state that ended it (before the auto-reset) into that environment's row of
+  /// final_observations() (num_envs x obs_dim floats; other rows keep older values). Turning it on
+  /// allocates the buffer (here, never in step); nullptr while off.
+  void set_keep_final_observations(bool on);
+  const float* final_observations() const { return final_obs_.empty() ? nullptr : final_obs_.data(); }
+
   /// The 3-D World the task runs on (rigid backend). Only valid when has_world(): a task built
   /// on the planar backend (make_task with Backend::planar) runs on simulator() instead.
   World& world() { return *world_; }
@@ -91,6 +99,11 @@ class Task {
  protected:
   /// Resets one environment (a valid id): new episode, its observation row rewritten.
   virtual void reset_one(int env) = 0;
+  /// Writes environment env's observation row from the current state (every task has one).
+  virtual void write_obs(int env) = 0;
+  /// Called by step() for an environment that ended, before its auto-reset: with final
+  /// observations on, writes its observation row and copies it to final_observations(); else nothing.
+  void keep_final_obs(int env);
   Task(std::unique_ptr<World> world, int obs_dim, int action_dim);
   Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim);
   std::unique_ptr<World> world_;
@@ -98,6 +111,7 @@ class Task {
   int num_envs_ = 0, obs_dim_ = 0, action_dim_ = 0;
   std::vector<float> obs_, rewards_;
   std::vector<std::uint8_t> terminations_, truncations_;
+  std::vector<float> final_obs_;  // empty unless set_keep_final_observations(true)
   TaskInfos infos_;
 };
 

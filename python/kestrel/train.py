@@ -1,0 +1,317 @@
+"""Train a policy on a Kestrel task with a learner from PyPI, evaluate it, log and plot.
+
+    python -m kestrel.train Kestrel-PositionSetpoint-v0 --learner rsl_rl --envs 4096 --seed 0 \\
+        --steps 20000000 --out runs/ps --target-success 0.95
+
+Every --eval-every env-steps (and at the end) the deterministic policy is evaluated on
+--eval-episodes episodes of a separate env seeded with --eval-seed (never a training seed): one
+episode per environment, success rate (position setpoint: truncated within the task's success
+radius; other tasks: terminated without a crash is not told apart, so success = the task's own
+count), crash rate, mean return, mean episode length, final distance. Writes DIR/log.csv, DIR/curves.png (return,
+success rate, episode length over env-steps), DIR/checkpoints/*.pt and DIR/summary.json; with
+--target-success the run stops at the first evaluation that reaches it. Times: `train_s` is the
+wall time spent in the learner and the simulator (evaluations excluded), `sim_s` the part of it in
+env.step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import time
+from dataclasses import dataclass, asdict
+from typing import Callable
+
+import numpy as np
+
+import kestrel
+from .vector_env import GYM_IDS, KestrelVectorEnv, make_vec
+
+
+@dataclass
+class EvalResult:
+    episodes: int
+    mean_return: float
+    success_rate: float
+    crash_rate: float
+    mean_length: float
+    final_distance_m: float
+
+
+def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: int = 1024, seed: int = 1_000_003,
+             threads: int | None = None, **overrides) -> EvalResult:
+    """One episode in each of `episodes` environments seeded with `seed`; deterministic policy."""
+    env = make_vec(env_id, num_envs=episodes, seed=seed, threads=threads, **overrides)
+    obs, _ = env.reset(seed=seed)
+    n = env.num_envs
+    done = np.zeros(n, bool)
+    ret = np.zeros(n)
+    length = np.zeros(n, np.int64)
+    success = np.zeros(n, bool)
+    crash = np.zeros(n, bool)
+    dist = np.zeros(n)
+    setpoint = env.task.name == "position_setpoint_task"
+    before = env.task.infos
+    while not done.all():
+        obs, r, te, tr, info = env.step(policy(obs))
+        alive = ~done
+        ret[alive] += r[alive]
+        length[alive] += 1
+        ended = (te | tr) & alive
+        if ended.any():
+            crash[ended] = te[ended] if setpoint else False
+            if "success" in info:
+                success[ended] = info["success"][ended]
+            if setpoint:
+                dist[ended] = np.linalg.norm(info["final_obs"][ended, :3], axis=1)
+            done |= ended
+    if not setpoint:  # the task's own counters over exactly the first episodes is not available: use its rates
+        inf = env.task.infos
+        eps = max(1, inf["episodes"] - before["episodes"])
+        success[:] = False
+        success[: int(round(n * (inf["successes"] - before["successes"]) / eps))] = True
+        crash[: int(round(n * (inf["crashes"] - before["crashes"]) / eps))] = True
+    env.close()
+    return EvalResult(n, float(ret.mean()), float(success.mean()), float(crash.mean()), float(length.mean()),
+                      float(dist.mean()) if setpoint else float("nan"))
+
+
+class _Timer:
+    """Accumulates the time spent inside env.step (the simulator's share)."""
+
+    def __init__(self, env: KestrelVectorEnv):
+        self.sim_s = 0.0
+        inner = env.step
+
+        def timed(actions):
+            t0 = time.perf_counter()
+            out = inner(actions)
+            self.sim_s += time.perf_counter() - t0
+            return out
+
+        env.step = timed  # type: ignore[method-assign]
+
+
+def _rsl_rl_cfg(args) -> dict:
+    return {
+        "num_steps_per_env": args.rollout,
+        "save_interval": 10**9,
+        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "actor": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
+                  "obs_normalization": True,
+                  "distribution_cfg": {"class_name": "rsl_rl.modules.GaussianDistribution", "init_std": args.init_std}},
+        "critic": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
+                   "obs_normalization": True},
+        "algorithm": {"class_name": "rsl_rl.algorithms.PPO", "num_learning_epochs": args.epochs,
+                      "num_mini_batches": args.minibatches, "clip_param": 0.2, "gamma": args.gamma, "lam": 0.95,
+                      "value_loss_coef": 1.0, "entropy_coef": args.entropy, "learning_rate": args.lr,
+                      "max_grad_norm": 1.0, "schedule": "adaptive", "desired_kl": 0.01},
+        "check_for_nan": False,
+    }
+
+
+class Learner:
+    """train(env_steps) and a deterministic numpy policy, for either learner."""
+
+    def __init__(self, args, env: KestrelVectorEnv):
+        import torch
+
+        torch.manual_seed(args.seed)
+        torch.set_num_threads(max(1, args.torch_threads))
+        self.kind = args.learner
+        self.env = env
+        if self.kind == "rsl_rl":
+            import contextlib
+            import io
+
+            from rsl_rl.runners import OnPolicyRunner
+
+            from .adapters import RslRlVecEnv
+
+            self.venv = RslRlVecEnv(env, reward_scale=args.reward_scale)
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.runner = OnPolicyRunner(self.venv, _rsl_rl_cfg(args), log_dir=None, device="cpu")
+            self.steps_per_iter = args.rollout * env.num_envs
+        elif self.kind == "sb3":
+            from stable_baselines3 import PPO
+            from stable_baselines3.common.vec_env import VecNormalize
+
+            from .adapters import Sb3VecEnv
+
+            self.venv = VecNormalize(Sb3VecEnv(env), norm_obs=True, norm_reward=False, gamma=args.gamma)
+            n_steps = args.rollout
+            self.model = PPO("MlpPolicy", self.venv, n_steps=n_steps, batch_size=max(64, n_steps * env.num_envs // args.minibatches),
+                             n_epochs=args.epochs, gamma=args.gamma, learning_rate=args.lr, ent_coef=args.entropy,
+                             policy_kwargs={"net_arch": [64, 64], "log_std_init": float(np.log(args.init_std))},
+                             seed=args.seed, device="cpu", verbose=0)
+            self.steps_per_iter = n_steps * env.num_envs
+        else:
+            raise ValueError(f"--learner: expected rsl_rl or sb3, got {self.kind!r}")
+
+    def train(self, env_steps: int) -> int:
+        iters = max(1, env_steps // self.steps_per_iter)
+        if self.kind == "rsl_rl":
+            import contextlib
+            import io
+
+            with contextlib.redirect_stdout(io.StringIO()):
+                self.runner.learn(iters)
+            self.runner.current_learning_iteration += 1
+        else:
+            self.model.learn(iters * self.steps_per_iter, reset_num_timesteps=False)
+        return iters * self.steps_per_iter
+
+    def policy(self) -> Callable[[np.ndarray], np.ndarray]:
+        import torch
+
+        if self.kind == "rsl_rl":
+            from tensordict import TensorDict
+
+            net = self.runner.get_inference_policy()
+            lo, hi = float(self.env.single_action_space.low[0]), float(self.env.single_action_space.high[0])
+
+            def act(obs: np.ndarray) -> np.ndarray:
+                with torch.inference_mode():
+                    o = TensorDict({"policy": torch.from_numpy(np.array(obs))}, batch_size=[obs.shape[0]])
+                    return net(o).clamp(lo, hi).numpy().astype(np.float32, copy=False)
+
+            return act
+        venv = self.venv
+        model = self.model
+
+        def act_sb3(obs: np.ndarray) -> np.ndarray:
+            a, _ = model.predict(venv.normalize_obs(np.array(obs)), deterministic=True)
+            return np.ascontiguousarray(a, dtype=np.float32)
+
+        return act_sb3
+
+    def save(self, path: str) -> None:
+        if self.kind == "rsl_rl":
+            self.runner.save(path)
+            self.runner.alg.train_mode()
+        else:
+            self.model.save(path)
+            self.venv.save(path + ".vecnormalize.pkl")
+
+
+def plot(rows: list[dict], path: str, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = [r["env_steps"] for r in rows]
+    fig, ax = plt.subplots(1, 3, figsize=(13, 3.6))
+    ax[0].plot(x, [r["mean_return"] for r in rows], marker="o")
+    ax[0].set_title("evaluation return")
+    ax[1].plot(x, [100 * r["success_rate"] for r in rows], marker="o", label="success")
+    ax[1].plot(x, [100 * r["crash_rate"] for r in rows], marker="x", label="crash")
+    ax[1].set_title("success / crash rate (%)")
+    ax[1].legend()
+    ax[2].plot(x, [r["mean_length"] for r in rows], marker="o")
+    ax[2].set_title("episode length (env-steps)")
+    for a in ax:
+        a.set_xlabel("env-steps")
+        a.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> dict:
+    p = argparse.ArgumentParser(prog="python -m kestrel.train", description=__doc__.split("\n\n")[0])
+    p.add_argument("task", nargs="?", default="Kestrel-PositionSetpoint-v0",
+                   help=f"gymnasium id ({', '.join(GYM_IDS)}) or task id ({', '.join(kestrel.task_ids())})")
+    p.add_argument("--learner", choices=["rsl_rl", "sb3"], default="rsl_rl")
+    p.add_argument("--envs", type=int, default=4096)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--steps", type=int, default=20_000_000, help="env-steps to train at most")
+    p.add_argument("--out", default="runs/kestrel")
+    p.add_argument("--threads", type=int, default=None, help="simulator threads (default: every core)")
+    p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1: small MLPs gain nothing from more, and OpenMP threads spin against the simulator's)")
+    p.add_argument("--eval-every", type=int, default=2_000_000, help="env-steps between evaluations")
+    p.add_argument("--eval-episodes", type=int, default=1024)
+    p.add_argument("--eval-seed", type=int, default=1_000_003, help="seed of the evaluation env (unseen in training)")
+    p.add_argument("--target-success", type=float, default=None, help="stop at the first evaluation reaching it")
+    p.add_argument("--rollout", type=int, default=24, help="env-steps per env per update")
+    p.add_argument("--epochs", type=int, default=5)
+    p.add_argument("--minibatches", type=int, default=4)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--gamma", type=float, default=0.99)
+    p.add_argument("--entropy", type=float, default=0.0)
+    p.add_argument("--init-std", type=float, default=1.0)
+    p.add_argument("--reward-scale", type=float, default=0.02, help="rsl_rl: rewards times this (no value normalisation there)")
+    p.add_argument("--episode-len", type=int, default=None, help="override task.episode_len_env_steps")
+    p.add_argument("--quiet", action="store_true")
+    args = p.parse_args(argv)
+
+    overrides = {}
+    if args.episode_len:
+        overrides["task"] = {"episode_len_env_steps": args.episode_len}
+    os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
+    env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
+    timer = _Timer(env)
+    learner = Learner(args, env)
+    rows: list[dict] = []
+    t_train = 0.0
+    done_steps = 0
+
+    log_f = open(os.path.join(args.out, "log.csv"), "w", newline="")
+    log_w = None
+
+    def eval_row() -> dict:
+        nonlocal log_w
+        t0 = time.perf_counter()
+        res = evaluate(learner.policy(), args.task, args.eval_episodes, args.eval_seed, args.threads, **overrides)
+        row = {"env_steps": done_steps, "train_s": round(t_train, 3), "sim_s": round(timer.sim_s, 3), **asdict(res),
+               "eval_s": round(time.perf_counter() - t0, 3)}
+        rows.append(row)
+        if log_w is None:
+            log_w = csv.DictWriter(log_f, fieldnames=list(row.keys()))
+            log_w.writeheader()
+        log_w.writerow(row)
+        log_f.flush()
+        return row
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=args.steps, unit="step", unit_scale=True, disable=args.quiet, desc=f"{args.learner} {args.task}")
+    row = eval_row()  # the untrained policy
+    bar.set_postfix(ret=f"{row['mean_return']:.0f}", success=f"{row['success_rate']:.2f}")
+    reached = None
+    while done_steps < args.steps:
+        chunk = min(args.eval_every, args.steps - done_steps)
+        t0 = time.perf_counter()
+        n = learner.train(chunk)
+        t_train += time.perf_counter() - t0
+        done_steps += n
+        bar.update(n)
+        row = eval_row()
+        learner.save(os.path.join(args.out, "checkpoints", f"{args.learner}_{done_steps}.pt"))
+        bar.set_postfix(ret=f"{row['mean_return']:.0f}", success=f"{row['success_rate']:.3f}", train_s=f"{t_train:.0f}")
+        if args.target_success is not None and row["success_rate"] >= args.target_success:
+            reached = row
+            break
+    bar.close()
+
+    log_f.close()
+    plot(rows, os.path.join(args.out, "curves.png"),
+         f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
+    summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
+               "seed": args.seed, "eval_seed": args.eval_seed, "eval_episodes": args.eval_episodes,
+               "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
+               "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
+               "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
+               "cpu_count": os.cpu_count()}
+    with open(os.path.join(args.out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=2)
+    if not args.quiet:
+        print(json.dumps({k: summary[k] for k in ("env_steps", "train_s", "sim_share", "final")}, indent=1))
+    return summary
+
+
+if __name__ == "__main__":
+    main()

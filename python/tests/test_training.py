@@ -1,0 +1,39 @@
+"""A short training run on a fixed seed raises the evaluation return clearly above the untrained
+policy's (a margin, not a timing). rsl_rl's PPO from PyPI through kestrel.adapters.RslRlVecEnv;
+Stable-Baselines3's PPO through Sb3VecEnv for a few updates (the adapter works end to end)."""
+import numpy as np
+
+import kestrel
+from kestrel.train import evaluate, main
+
+
+def test_rsl_rl_training_improves_return(tmp_path):
+    # ~1.2 M env-steps: about 40 s on 2 cores (rsl_rl's PPO from PyPI, torch on 1 thread).
+    s = main(["Kestrel-PositionSetpointPosition-v0", "--learner", "rsl_rl", "--envs", "256", "--seed", "1", "--steps", "1200000",
+              "--eval-every", "600000", "--eval-episodes", "256", "--eval-seed", "777", "--episode-len", "250",
+              "--threads", "2", "--out", str(tmp_path), "--quiet"])
+    before, after = s["initial"], s["final"]
+    # Untrained (mean action 0: hold where it starts, ~0.4 reward per step): ~98 over 250 steps and
+    # 4.3 m from the target at the end. Trained on this seed: ~125 and 2.6 m. Margins well inside.
+    assert after["mean_return"] > before["mean_return"] + 12, (before, after)
+    assert after["final_distance_m"] < before["final_distance_m"] - 0.8, (before, after)
+    assert (tmp_path / "log.csv").exists() and (tmp_path / "curves.png").exists()
+    assert list((tmp_path / "checkpoints").glob("*.pt"))
+
+
+def test_sb3_adapter_trains(tmp_path):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecEnv
+
+    from kestrel.adapters import Sb3VecEnv
+
+    env = kestrel.make_vec("Kestrel-PositionSetpoint-v0", num_envs=64, seed=0, threads=1, task={"episode_len_env_steps": 50})
+    venv = Sb3VecEnv(env)
+    assert isinstance(venv, VecEnv)
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=1024, n_epochs=2, seed=0, device="cpu", verbose=0)
+    model.learn(64 * 64 * 3)
+    assert model.num_timesteps >= 64 * 64 * 3
+    assert len(model.ep_info_buffer) > 0  # episodes reached SB3 through the adapter's infos
+    res = evaluate(lambda o: model.predict(np.array(o), deterministic=True)[0].astype(np.float32), "Kestrel-PositionSetpoint-v0",
+                   episodes=32, seed=5, threads=1, task={"episode_len_env_steps": 50})
+    assert np.isfinite(res.mean_return)
