@@ -135,6 +135,31 @@ def from_sb3(model, vec_normalize=None) -> MlpSpec:
                    action_scale=np.ones(space.shape), action_offset=np.zeros(space.shape))
 
 
+def from_rsl_rl(actor_state_dict: dict, action_low, action_high, activation: str = "elu", eps: float = 1e-2) -> MlpSpec:
+    """An rsl-rl-lib 5.x actor (MLPModel) from its state dict (a checkpoint's "actor_state_dict"):
+    layers mlp.0 / mlp.2 / mlp.4 and, if present, its EmpiricalNormalization
+    ((obs - mean) / (std + eps), no clip). The deterministic action is the mean, clipped to the
+    action space as the training loop's evaluation does."""
+    sd = {k: v.detach().cpu().numpy() if hasattr(v, "detach") else np.asarray(v) for k, v in actor_state_dict.items()}
+    keys = sorted((k for k in sd if k.startswith("mlp.") and k.endswith(".weight")), key=lambda k: int(k.split(".")[1]))
+    if len(keys) != 3:
+        raise ValueError(f"actor_state_dict: expected 3 linear layers (two hidden), got {keys}")
+    weights = [sd[k] for k in keys]
+    biases = [sd[k.replace(".weight", ".bias")] for k in keys]
+    obs_dim = weights[0].shape[1]
+    if "obs_normalizer._mean" in sd:
+        mean = sd["obs_normalizer._mean"].reshape(obs_dim).astype(np.float64)
+        std = sd["obs_normalizer._std"].reshape(obs_dim).astype(np.float64)
+        inv_std = 1.0 / (std + eps)
+    else:
+        mean, inv_std = np.zeros(obs_dim), np.ones(obs_dim)
+    n = weights[2].shape[0]
+    low = np.broadcast_to(np.asarray(action_low, dtype=np.float32), (n,))
+    high = np.broadcast_to(np.asarray(action_high, dtype=np.float32), (n,))
+    return MlpSpec(activation=activation, weights=weights, biases=biases, obs_mean=mean, obs_inv_std=inv_std,
+                   obs_clip=3.0e38, action_low=low, action_high=high, action_scale=np.ones(n), action_offset=np.zeros(n))
+
+
 def _hex(v) -> str:
     v = float(np.float32(v))
     if math.isinf(v):
