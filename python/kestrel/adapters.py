@@ -36,9 +36,28 @@ class RslRlVecEnv:
 
 
 class _RslRlImpl:
-    def __init__(self, env: KestrelVectorEnv, device: str = "cpu", reward_scale: float = 1.0):
+    def __init__(self, env: KestrelVectorEnv, device: str = "cpu", reward_scale: float = 1.0, squash: bool = False,
+                 action_repeat: int = 1, distance_shaping: float = 0.0, gamma: float = 0.99):
         import torch
 
+        # distance_shaping k (position setpoint): the learner's reward gets the potential-based term
+        # gamma * Phi(s') - Phi(s) with Phi = -k * |target - position| (Ng, Harada & Russell 1999: the
+        # optimal policy is unchanged). The task's own reward is flat (1/40 per m) until ~0.7 m from the
+        # target, where its peak of ~30 per step is; with the shaping the first updates already pull
+        # towards the target. The env's rewards (and every evaluation) are untouched.
+        self.shaping = float(distance_shaping)
+        self.gamma = float(gamma)
+        # action_repeat k: each learner action is held for k env-steps (rewards summed; an env that
+        # ends within them reports done with the reward up to its end, and its new episode's first
+        # steps take the rest of that action). The learner decides at 1/k of the env rate: k times
+        # fewer (and k times more consequential) decisions per env-step for its credit assignment,
+        # and k times less learner time per env-step.
+        self.action_repeat = max(1, int(action_repeat))
+        # squash: the learner's (unbounded Gaussian) actions go through tanh into [-1, 1] instead of
+        # being clamped (for normalised action spaces). With a clamp, a mean beyond the bound gets no
+        # gradient and drifts; the deterministic policy clamp(mean) then saturates where the
+        # stochastic one did not.
+        self.squash = bool(squash)
         # rsl_rl has no value normalisation: the position setpoint reward (up to ~30 per step,
         # returns in the thousands) needs scaling, or the value loss dominates the clipped gradient.
         self.reward_scale = float(reward_scale)
@@ -46,7 +65,7 @@ class _RslRlImpl:
         self.env = env
         self.num_envs = env.num_envs
         self.num_actions = env.single_action_space.shape[0]
-        self.max_episode_length = env.task.episode_len_env_steps
+        self.max_episode_length = -(-env.task.episode_len_env_steps // self.action_repeat)
         self.episode_length_buf = torch.zeros(self.num_envs, dtype=torch.long)
         self.device = device
         self.cfg = {"task": env.task.name, "controller": env.task.controller, "num_envs": self.num_envs}
@@ -61,7 +80,7 @@ class _RslRlImpl:
         return TensorDict({"policy": self._torch.from_numpy(obs.copy())}, batch_size=[self.num_envs])
 
     def get_observations(self):
-        return self._obs(self.env.task.observations)
+        return self._obs(self.env.current_observations)
 
     def reset(self):
         obs, _ = self.env.reset()
@@ -70,17 +89,50 @@ class _RslRlImpl:
 
     def step(self, actions):
         torch = self._torch
-        a = actions.detach().to("cpu", torch.float32).clamp_(self._low, self._high).contiguous().numpy()
-        obs, rew, term, trunc, info = self.env.step(a)
-        dones = np.logical_or(term, trunc)
+        a = actions.detach().to("cpu", torch.float32)
+        a = (torch.tanh(a) if self.squash else a.clamp_(self._low, self._high)).contiguous().numpy()
+        d0 = np.linalg.norm(self.env.current_observations[:, :3], axis=1) if self.shaping else None
+        if self.action_repeat == 1:
+            obs, rew, term, trunc, info = self.env.step(a)
+            dones = np.logical_or(term, trunc)
+            time_outs = trunc & ~term
+            s = info.get("success")
+            succ = None if s is None or not dones.any() else s[dones]
+            rew = rew.copy()
+            if self.shaping:
+                d1 = np.linalg.norm(obs[:, :3], axis=1)
+                if dones.any():
+                    d1[dones] = np.linalg.norm(info["final_obs"][dones, :3], axis=1)
+        else:
+            total = np.zeros(self.num_envs)
+            dones = np.zeros(self.num_envs, bool)
+            time_outs = np.zeros(self.num_envs, bool)
+            succ_l = []
+            d_end = np.zeros(self.num_envs)
+            for _ in range(self.action_repeat):
+                obs, rew, term, trunc, info = self.env.step(a)
+                total += np.where(dones, 0.0, rew)
+                ended = np.logical_or(term, trunc) & ~dones
+                if ended.any():
+                    if self.shaping:
+                        d_end[ended] = np.linalg.norm(info["final_obs"][ended, :3], axis=1)
+                    time_outs |= ended & trunc & ~term
+                    if "success" in info:
+                        succ_l.append(info["success"][ended])
+                    dones |= ended
+            succ = np.concatenate(succ_l) if succ_l else None
+            rew = total.astype(np.float32)
+            if self.shaping:
+                d1 = np.where(dones, d_end, np.linalg.norm(obs[:, :3], axis=1))
+        if self.shaping:
+            rew = rew + (self.shaping * (d0 - self.gamma * d1)).astype(np.float32)
         self.episode_length_buf += 1
         d = torch.from_numpy(dones)
         self.episode_length_buf[d] = 0
-        extras: dict[str, Any] = {"time_outs": torch.from_numpy(trunc & ~term).float(), "log": {}}
-        s = info.get("success")
-        if s is not None and dones.any():
-            extras["log"]["/success_rate"] = float(s[dones].mean())
-        r = torch.from_numpy(rew.copy())
+        extras: dict[str, Any] = {"time_outs": torch.from_numpy(time_outs).float(), "log": {}}
+        if succ is not None and len(succ):
+            extras["log"]["/success_rate"] = float(succ.mean())
+        r = torch.from_numpy(rew)
         if self.reward_scale != 1.0:
             r.mul_(self.reward_scale)
         return self._obs(obs), r, d.long(), extras

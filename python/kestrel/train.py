@@ -1,7 +1,10 @@
 """Train a policy on a Kestrel task with a learner from PyPI, evaluate it, log and plot.
 
-    python -m kestrel.train Kestrel-PositionSetpoint-v0 --learner rsl_rl --envs 4096 --seed 0 \\
-        --steps 20000000 --out runs/ps --target-success 0.95
+    python -m kestrel.train Kestrel-PositionSetpoint-v0 --learner rsl_rl --seed 0 --threads 1 \\
+        --out runs/ps --target-success 0.95
+
+(that task's defaults: _TASK_DEFAULTS below; 100 % success after 1.7 M env-steps, 14 s of training
+on 2 cores, bench/results/python/README.md)
 
 Every --eval-every env-steps (and at the end) the deterministic policy is evaluated on
 --eval-episodes episodes of a separate env seeded with --eval-seed (never a training seed): one
@@ -100,12 +103,12 @@ def _rsl_rl_cfg(args) -> dict:
         "save_interval": 10**9,
         "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "actor": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
-                  "obs_normalization": True,
+                  "obs_normalization": bool(args.obs_norm),
                   "distribution_cfg": {"class_name": "rsl_rl.modules.GaussianDistribution", "init_std": args.init_std}},
         "critic": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
-                   "obs_normalization": True},
+                   "obs_normalization": bool(args.obs_norm)},
         "algorithm": {"class_name": "rsl_rl.algorithms.PPO", "num_learning_epochs": args.epochs,
-                      "num_mini_batches": args.minibatches, "clip_param": 0.2, "gamma": args.gamma, "lam": 0.95,
+                      "num_mini_batches": args.minibatches, "clip_param": 0.2, "gamma": args.gamma, "lam": args.lam,
                       "value_loss_coef": 1.0, "entropy_coef": args.entropy, "learning_rate": args.lr,
                       "max_grad_norm": 1.0, "schedule": "adaptive", "desired_kl": 0.01},
         "check_for_nan": False,
@@ -130,10 +133,13 @@ class Learner:
 
             from .adapters import RslRlVecEnv
 
-            self.venv = RslRlVecEnv(env, reward_scale=args.reward_scale)
+            self.squash = bool(args.squash) and float(env.single_action_space.high[0]) == 1.0
+            self.venv = RslRlVecEnv(env, reward_scale=args.reward_scale, squash=self.squash, action_repeat=args.action_repeat,
+                                     distance_shaping=args.shaping if env.task.name == "position_setpoint_task" else 0.0,
+                                     gamma=args.gamma)
             with contextlib.redirect_stdout(io.StringIO()):
                 self.runner = OnPolicyRunner(self.venv, _rsl_rl_cfg(args), log_dir=None, device="cpu")
-            self.steps_per_iter = args.rollout * env.num_envs
+            self.steps_per_iter = args.rollout * env.num_envs * self.venv.action_repeat
         elif self.kind == "sb3":
             from stable_baselines3 import PPO
             from stable_baselines3.common.vec_env import VecNormalize
@@ -143,7 +149,7 @@ class Learner:
             self.venv = VecNormalize(Sb3VecEnv(env), norm_obs=True, norm_reward=False, gamma=args.gamma)
             n_steps = args.rollout
             self.model = PPO("MlpPolicy", self.venv, n_steps=n_steps, batch_size=max(64, n_steps * env.num_envs // args.minibatches),
-                             n_epochs=args.epochs, gamma=args.gamma, learning_rate=args.lr, ent_coef=args.entropy,
+                             n_epochs=args.epochs, gamma=args.gamma, gae_lambda=args.lam, learning_rate=args.lr, ent_coef=args.entropy,
                              policy_kwargs={"net_arch": [64, 64], "log_std_init": float(np.log(args.init_std))},
                              seed=args.seed, device="cpu", verbose=0)
             self.steps_per_iter = n_steps * env.num_envs
@@ -171,11 +177,14 @@ class Learner:
 
             net = self.runner.get_inference_policy()
             lo, hi = float(self.env.single_action_space.low[0]), float(self.env.single_action_space.high[0])
+            squash = self.squash
 
             def act(obs: np.ndarray) -> np.ndarray:
                 with torch.inference_mode():
                     o = TensorDict({"policy": torch.from_numpy(np.array(obs))}, batch_size=[obs.shape[0]])
-                    return net(o).clamp(lo, hi).numpy().astype(np.float32, copy=False)
+                    a = net(o)
+                    a = torch.tanh(a) if squash else a.clamp(lo, hi)
+                    return a.numpy().astype(np.float32, copy=False)
 
             return act
         venv = self.venv
@@ -221,34 +230,89 @@ def plot(rows: list[dict], path: str, title: str) -> None:
     plt.close(fig)
 
 
+# Normalised action spaces the trainer uses by default. Kestrel-PositionSetpoint-v0 (Lee velocity
+# control): the task clips actions to +-10 (m/s, rad/s); a unit-std initial Gaussian over that
+# range and a policy that must hold a hover to within 0.3 m learnt to fly towards the target but
+# not to settle on it (1-3 % success after 25 M env-steps). The scripted policy that reaches every
+# target (vehicle-frame error, norm <= 2 m/s) needs no more, so the learner acts in [-1, 1]
+# scaled to +-2 m/s and +-1 rad/s of yaw rate (Aerial Gym's action transformation).
+_AUTO_ACTION_SCALE: dict[str, list[float]] = {
+    "Kestrel-PositionSetpoint-v0": [2.0, 2.0, 2.0, 1.0],
+}
+
+_VEHICLE_FRAME_OBS = {"Kestrel-PositionSetpoint-v0"}
+
+# Defaults of the options left unset on the command line (help: "None" = these).
+_GENERIC_DEFAULTS = {"envs": 4096, "steps": 20_000_000, "eval_every": 2_000_000, "rollout": 24, "gamma": 0.99,
+                     "obs_norm": 1, "squash": 0, "action_repeat": 1, "shaping": 0.0, "init_std": 1.0}
+# Issue 11: Kestrel-PositionSetpoint-v0 (Lee velocity control) stalled at 1-3 % success after 25 M
+# env-steps with the generic settings. What each change fixes (bench/results/python/README.md):
+# - normalised actions (_AUTO_ACTION_SCALE) squashed with tanh (a clamped Gaussian's mean drifts
+#   past the bound with no gradient and the deterministic policy saturates: crashes);
+# - the error in the vehicle frame (_VEHICLE_FRAME_OBS): the target policy becomes linear;
+# - action repeat 10 (the learner decides at 10 Hz; its credit assignment at 100 Hz saw almost no
+#   effect of one action through the velocity loop) with gamma 0.96 per decision (~0.996 per step);
+# - potential-based distance shaping (optimal policy unchanged): the task's reward is flat far
+#   from the target;
+# - no observation normalisation: the running mean of target - position is ~3.4 m (starts are on
+#   one side), which put the target itself far outside the normalised inputs' range;
+# - 256 envs x 16 decisions per update: 10 x more updates per env-step than 4096 x 24.
+_TASK_DEFAULTS: dict[str, dict] = {
+    "Kestrel-PositionSetpoint-v0": {"envs": 256, "steps": 4_000_000, "eval_every": 250_000, "rollout": 16,
+                                    "gamma": 0.96, "obs_norm": 0, "squash": 1, "action_repeat": 10,
+                                    "shaping": 300.0, "init_std": 1.0},
+}
+
+
 def main(argv: list[str] | None = None) -> dict:
     p = argparse.ArgumentParser(prog="python -m kestrel.train", description=__doc__.split("\n\n")[0])
     p.add_argument("task", nargs="?", default="Kestrel-PositionSetpoint-v0",
                    help=f"gymnasium id ({', '.join(GYM_IDS)}) or task id ({', '.join(kestrel.task_ids())})")
     p.add_argument("--learner", choices=["rsl_rl", "sb3"], default="rsl_rl")
-    p.add_argument("--envs", type=int, default=4096)
+    p.add_argument("--envs", type=int, default=None)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--steps", type=int, default=20_000_000, help="env-steps to train at most")
+    p.add_argument("--steps", type=int, default=None, help="env-steps to train at most")
     p.add_argument("--out", default="runs/kestrel")
     p.add_argument("--threads", type=int, default=None, help="simulator threads (default: every core)")
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1: small MLPs gain nothing from more, and OpenMP threads spin against the simulator's)")
-    p.add_argument("--eval-every", type=int, default=2_000_000, help="env-steps between evaluations")
+    p.add_argument("--eval-every", type=int, default=None, help="env-steps between evaluations")
     p.add_argument("--eval-episodes", type=int, default=1024)
     p.add_argument("--eval-seed", type=int, default=1_000_003, help="seed of the evaluation env (unseen in training)")
     p.add_argument("--target-success", type=float, default=None, help="stop at the first evaluation reaching it")
-    p.add_argument("--rollout", type=int, default=24, help="env-steps per env per update")
+    p.add_argument("--rollout", type=int, default=None, help="learner steps (decisions) per env per update")
     p.add_argument("--epochs", type=int, default=5)
     p.add_argument("--minibatches", type=int, default=4)
     p.add_argument("--lr", type=float, default=1e-3)
-    p.add_argument("--gamma", type=float, default=0.99)
+    p.add_argument("--gamma", type=float, default=None)
+    p.add_argument("--obs-norm", type=int, default=None, help="rsl_rl: running observation normalisation (1/0)")
+    p.add_argument("--squash", type=int, default=None, help="rsl_rl, normalised actions: tanh instead of a clamp (1/0)")
+    p.add_argument("--action-repeat", type=int, default=None, help="rsl_rl: env-steps each learner action is held")
+    p.add_argument("--shaping", type=float, default=None, help="rsl_rl, position setpoint: potential-based distance shaping (reward units per m)")
+    p.add_argument("--lam", type=float, default=0.95, help="GAE lambda")
     p.add_argument("--entropy", type=float, default=0.0)
-    p.add_argument("--init-std", type=float, default=1.0)
+    p.add_argument("--init-std", type=float, default=None)
     p.add_argument("--reward-scale", type=float, default=0.02, help="rsl_rl: rewards times this (no value normalisation there)")
     p.add_argument("--episode-len", type=int, default=None, help="override task.episode_len_env_steps")
+    p.add_argument("--action-scale", default="auto",
+                   help="normalised actions in [-1, 1] times these (comma list, one or one per action), 'none' for the "
+                        "task's own +-10 actions; auto: " + ", ".join(f"{k} {v}" for k, v in _AUTO_ACTION_SCALE.items()))
+    p.add_argument("--vehicle-frame-obs", choices=["auto", "on", "off"], default="auto",
+                   help="position setpoint: target - position rotated into the vehicle frame (auto: on for "
+                        + ", ".join(sorted(_VEHICLE_FRAME_OBS)) + ")")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
+    for k, v in {**_GENERIC_DEFAULTS, **_TASK_DEFAULTS.get(args.task, {})}.items():
+        if getattr(args, k) is None:
+            setattr(args, k, v)
 
     overrides = {}
+    scale = _AUTO_ACTION_SCALE.get(args.task) if args.action_scale == "auto" else (
+        None if args.action_scale.lower() == "none" else [float(x) for x in args.action_scale.split(",")])
+    if scale is not None:
+        overrides["action_scale"] = scale
+    vframe = args.task in _VEHICLE_FRAME_OBS if args.vehicle_frame_obs == "auto" else args.vehicle_frame_obs == "on"
+    if vframe:
+        overrides["vehicle_frame_obs"] = True
     if args.episode_len:
         overrides["task"] = {"episode_len_env_steps": args.episode_len}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
@@ -301,7 +365,9 @@ def main(argv: list[str] | None = None) -> dict:
     plot(rows, os.path.join(args.out, "curves.png"),
          f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
-               "seed": args.seed, "eval_seed": args.eval_seed, "eval_episodes": args.eval_episodes,
+               "seed": args.seed, "action_scale": scale, "vehicle_frame_obs": vframe, "rollout": args.rollout, "epochs": args.epochs,
+               "minibatches": args.minibatches, "lr": args.lr, "gamma": args.gamma, "init_std": args.init_std,
+               "entropy": args.entropy, "reward_scale": args.reward_scale, "eval_seed": args.eval_seed, "eval_episodes": args.eval_episodes,
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],

@@ -75,7 +75,7 @@ class KestrelVectorEnv(VectorEnv):
     def __init__(self, task_id: str = "position_setpoint_task", num_envs: int | None = 1024, seed: int = 0,
                  threads: int | None = None, scenario: Any = None, backend: str | None = None,
                  render_mode: str | None = None, autoreset_mode: str | AutoresetMode = AutoresetMode.SAME_STEP,
-                 **overrides: Any):
+                 action_scale: Any = None, vehicle_frame_obs: bool = False, **overrides: Any):
         names = {"same_step": AutoresetMode.SAME_STEP, "next_step": AutoresetMode.NEXT_STEP,
                  "samestep": AutoresetMode.SAME_STEP, "nextstep": AutoresetMode.NEXT_STEP}
         mode = autoreset_mode if isinstance(autoreset_mode, AutoresetMode) else names.get(str(autoreset_mode).lower())
@@ -95,6 +95,30 @@ class KestrelVectorEnv(VectorEnv):
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (od,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         bound = _action_bound(self.task.name, self.task.controller)
+        # action_scale (opt-in, a number or one per action): a normalised action space [-1, 1]
+        # that step() clips and multiplies by action_scale before the task sees it (Aerial Gym's
+        # action transformation), e.g. Lee velocity control [2, 2, 2, 1] -> +-2 m/s, +-1 rad/s.
+        # A learner with a unit-variance initial policy then explores in a sensible range
+        # instead of the task's +-10 clip. None: the task's own actions and bounds.
+        self._scale = None
+        if action_scale is not None:
+            sc = np.broadcast_to(np.asarray(action_scale, np.float32), (ad,)).copy()
+            if not np.all(np.isfinite(sc)) or np.any(sc <= 0):
+                raise ValueError(f"action_scale: expected positive finite values, got {action_scale!r}")
+            self._scale = sc
+            self._scaled = np.empty((self.task.num_envs, ad), np.float32)
+            bound = 1.0
+        self.action_scale = None if self._scale is None else self._scale.copy()
+        # vehicle_frame_obs (opt-in, position setpoint only): observations 0-2 (target - position,
+        # world frame) rotated about world z by -yaw into the vehicle frame, the frame in which
+        # Lee velocity control reads [vx, vy, vz] (the same rotation as the reward's
+        # vehicle_frame_error). The policy a = clip(e_vehicle) then flies straight at the target;
+        # with the world-frame error a start yaw of up to pi/6 makes it spiral in, and a small MLP
+        # must learn the yaw rotation from the quaternion. The returned observations are then a
+        # copy (final_obs too); the norm of 0-2, the distance, is unchanged.
+        self._vehicle_frame = bool(vehicle_frame_obs)
+        if self._vehicle_frame and not self._is_setpoint:
+            raise ValueError("vehicle_frame_obs: only for position_setpoint_task")
         self.single_action_space = spaces.Box(-bound, bound, (ad,), np.float32)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.render_mode = None
@@ -117,6 +141,20 @@ class KestrelVectorEnv(VectorEnv):
         self._pending: list[int] = []
         self._radius = t.success_radius_m
         self._is_setpoint = t.name == "position_setpoint_task"
+        self._obs_vf = np.empty_like(self._obs)
+        self._final_vf = np.empty_like(self._obs)
+
+    def _vf(self, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+        """src with columns 0-2 rotated into the vehicle frame (yaw as get_euler_xyz), into dst."""
+        if not self._vehicle_frame:
+            return src
+        np.copyto(dst, src)
+        x, y, z, w = src[:, 3], src[:, 4], src[:, 5], src[:, 6]
+        yaw = np.arctan2(2 * (w * z + x * y), w * w + x * x - y * y - z * z)
+        c, s = np.cos(yaw), np.sin(yaw)
+        dst[:, 0] = c * src[:, 0] + s * src[:, 1]
+        dst[:, 1] = -s * src[:, 0] + c * src[:, 1]
+        return dst
 
     def _num_envs_arg(self) -> int | None:
         return self._num_envs_req
@@ -134,13 +172,18 @@ class KestrelVectorEnv(VectorEnv):
         elif options and "env_ids" in options:
             self.task.reset_idx([int(i) for i in options["env_ids"]])
             self._pending = [i for i in self._pending if i not in set(options["env_ids"])]
-            return self._obs, {}
+            return self._vf(self._obs, self._obs_vf), {}
         else:
             self.task.reset()
         self._pending = []
-        return self._obs, {}
+        return self._vf(self._obs, self._obs_vf), {}
 
     def step(self, actions):
+        if self._scale is not None:
+            a = self._scaled
+            np.clip(actions, -1.0, 1.0, out=a)
+            a *= self._scale
+            actions = a
         any_ended = self.task.step(actions)
         if self._pending:  # next_step mode: the envs that ended last step start their episode now
             self.task.reset_idx(self._pending)
@@ -148,22 +191,22 @@ class KestrelVectorEnv(VectorEnv):
             any_ended = bool(self._terminated.any() or self._truncated.any())
         term, trunc = self._terminated, self._truncated
         if not any_ended:
-            return self._obs, self._rewards, term, trunc, {}
+            return self._vf(self._obs, self._obs_vf), self._rewards, term, trunc, {}
         ended = self._ended
         np.logical_or(term, trunc, out=ended)
-        infos: dict[str, Any] = {"final_obs": self._final_obs, "_final_obs": ended.copy()}
+        infos: dict[str, Any] = {"final_obs": self._vf(self._final_obs, self._final_vf), "_final_obs": ended.copy()}
         if self._is_setpoint:
             d = np.linalg.norm(self._final_obs[:, :3], axis=1)
             infos["success"] = ended & trunc & (d < self._radius)
             infos["_success"] = infos["_final_obs"]
         if self._next_step:
             out = self._out
-            np.copyto(out, self._obs)
-            out[ended] = self._final_obs[ended]
+            np.copyto(out, self._vf(self._obs, self._obs_vf))
+            out[ended] = infos["final_obs"][ended]
             self._pending = np.flatnonzero(ended).tolist()
             del infos["final_obs"], infos["_final_obs"]
             return out, self._rewards, term, trunc, infos
-        return self._obs, self._rewards, term, trunc, infos
+        return self._vf(self._obs, self._obs_vf), self._rewards, term, trunc, infos
 
     def close_extras(self, **kwargs: Any) -> None:
         self.task = None
@@ -174,12 +217,18 @@ class KestrelVectorEnv(VectorEnv):
         return self.task.state_hash
 
     @property
+    def current_observations(self) -> np.ndarray:
+        """The observations the last reset/step returned (same-step mode), as the learner sees them."""
+        return self._vf(self._obs, self._obs_vf)
+
+    @property
     def task_infos(self) -> dict:
         """The task's running episode statistics (episodes, crashes, successes, ...)."""
         return self.task.infos
 
     def scripted_actions(self) -> np.ndarray:
-        return self.task.scripted_actions()
+        a = self.task.scripted_actions()
+        return a if self._scale is None else np.ascontiguousarray(a / self._scale, dtype=np.float32)
 
     def __repr__(self) -> str:
         return f"KestrelVectorEnv({self.task.name if self.task else self._task_id}, num_envs={self.num_envs})"

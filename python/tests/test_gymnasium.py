@@ -90,3 +90,27 @@ def test_vector_env_checks():
     assert out[1].dtype in (np.float32, np.float64) and out[2].shape == out[3].shape == (3,)
     assert env.observation_space.contains(out[0])
     env.close()
+
+
+def test_normalised_actions_and_vehicle_frame_obs():
+    # The trainer's interface for Kestrel-PositionSetpoint-v0 (issue 11): actions in [-1, 1] scaled
+    # to +-2 m/s, +-1 rad/s; target - position in the vehicle frame (same distance). The linear
+    # policy a = clip(e_vehicle / 2) then reaches every target.
+    import kestrel
+    from kestrel.train import evaluate
+
+    plain = kestrel.make_vec("Kestrel-PositionSetpoint-v0", num_envs=8, seed=3, threads=1)
+    env = kestrel.make_vec("Kestrel-PositionSetpoint-v0", num_envs=8, seed=3, threads=1, action_scale=[2, 2, 2, 1],
+                           vehicle_frame_obs=True)
+    assert np.all(env.single_action_space.high == 1) and np.all(env.single_action_space.low == -1)
+    o0, o1 = plain.reset()[0].copy(), env.reset()[0].copy()
+    np.testing.assert_allclose(np.linalg.norm(o0[:, :3], axis=1), np.linalg.norm(o1[:, :3], axis=1), rtol=1e-5)
+    np.testing.assert_array_equal(o0[:, 3:], o1[:, 3:])
+    a = np.full((8, 4), 0.25, np.float32)
+    plain.step(np.ascontiguousarray(a * np.float32([2, 2, 2, 1])))
+    env.step(a)
+    assert plain.state_hash == env.state_hash  # the scaled action is exactly the task's action
+    res = evaluate(lambda o: np.ascontiguousarray(np.concatenate([np.clip(o[:, :3] / 2, -1, 1), np.zeros((len(o), 1))], 1),
+                                                  dtype=np.float32),
+                   "Kestrel-PositionSetpoint-v0", episodes=64, seed=11, threads=1, action_scale=[2, 2, 2, 1], vehicle_frame_obs=True)
+    assert res.success_rate >= 0.95 and res.crash_rate == 0, res
