@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 ACTIVATIONS = {"tanh": 0, "elu": 1, "relu": 2}
+SQUASH = {"none": 0, "tanh": 1}
 
 
 @dataclasses.dataclass
@@ -31,8 +32,11 @@ class MlpSpec:
     action_high: np.ndarray
     action_scale: np.ndarray
     action_offset: np.ndarray
+    squash: str = "none"            # "none" or "tanh" (a squashed Gaussian's mean, before the clip)
 
     def __post_init__(self):
+        if self.squash not in SQUASH:
+            raise ValueError(f"squash: expected one of {sorted(SQUASH)}, got {self.squash!r}")
         if self.activation not in ACTIVATIONS:
             raise ValueError(f"activation: expected one of {sorted(ACTIVATIONS)}, got {self.activation!r}")
         if len(self.weights) != 3 or len(self.biases) != 3:
@@ -69,7 +73,7 @@ class MlpSpec:
                     w2=self.weights[1], b2=self.biases[1], w3=self.weights[2], b3=self.biases[2],
                     obs_mean=self.obs_mean, obs_inv_std=self.obs_inv_std, obs_clip=float(self.obs_clip),
                     action_low=self.action_low, action_high=self.action_high,
-                    action_scale=self.action_scale, action_offset=self.action_offset)
+                    action_scale=self.action_scale, action_offset=self.action_offset, squash=SQUASH[self.squash])
 
     def torch_module(self):
         """The same function as a torch module (float32): the reference for parity and for ONNX."""
@@ -100,6 +104,8 @@ class MlpSpec:
             def forward(self, obs):
                 x = torch.clamp((obs - self.mean) * self.inv_std, -self.clip, self.clip)
                 y = self.l3(self.act(self.l2(self.act(self.l1(x)))))
+                if spec.squash == "tanh":
+                    y = torch.tanh(y)
                 return self.offset + self.scale * torch.minimum(torch.maximum(y, self.low), self.high)
 
         return Actor().eval()
@@ -135,11 +141,14 @@ def from_sb3(model, vec_normalize=None) -> MlpSpec:
                    action_scale=np.ones(space.shape), action_offset=np.zeros(space.shape))
 
 
-def from_rsl_rl(actor_state_dict: dict, action_low, action_high, activation: str = "elu", eps: float = 1e-2) -> MlpSpec:
+def from_rsl_rl(actor_state_dict: dict, action_low, action_high, activation: str = "elu", eps: float = 1e-2,
+                squash: str = "none", action_scale=None, obs_normalizer: bool = True) -> MlpSpec:
     """An rsl-rl-lib 5.x actor (MLPModel) from its state dict (a checkpoint's "actor_state_dict"):
     layers mlp.0 / mlp.2 / mlp.4 and, if present, its EmpiricalNormalization
     ((obs - mean) / (std + eps), no clip). The deterministic action is the mean, clipped to the
-    action space as the training loop's evaluation does."""
+    action space as the training loop's evaluation does; `squash="tanh"` and `action_scale` give
+    kestrel.adapters.RslRlVecEnv(squash=True) with make_vec(action_scale=...): a = scale tanh(y).
+    `obs_normalizer=False` ignores a normalizer the checkpoint carries but training did not use."""
     sd = {k: v.detach().cpu().numpy() if hasattr(v, "detach") else np.asarray(v) for k, v in actor_state_dict.items()}
     keys = sorted((k for k in sd if k.startswith("mlp.") and k.endswith(".weight")), key=lambda k: int(k.split(".")[1]))
     if len(keys) != 3:
@@ -147,7 +156,7 @@ def from_rsl_rl(actor_state_dict: dict, action_low, action_high, activation: str
     weights = [sd[k] for k in keys]
     biases = [sd[k.replace(".weight", ".bias")] for k in keys]
     obs_dim = weights[0].shape[1]
-    if "obs_normalizer._mean" in sd:
+    if obs_normalizer and "obs_normalizer._mean" in sd:
         mean = sd["obs_normalizer._mean"].reshape(obs_dim).astype(np.float64)
         std = sd["obs_normalizer._std"].reshape(obs_dim).astype(np.float64)
         inv_std = 1.0 / (std + eps)
@@ -156,8 +165,10 @@ def from_rsl_rl(actor_state_dict: dict, action_low, action_high, activation: str
     n = weights[2].shape[0]
     low = np.broadcast_to(np.asarray(action_low, dtype=np.float32), (n,))
     high = np.broadcast_to(np.asarray(action_high, dtype=np.float32), (n,))
+    scale = np.ones(n) if action_scale is None else np.broadcast_to(np.asarray(action_scale, dtype=np.float32), (n,))
     return MlpSpec(activation=activation, weights=weights, biases=biases, obs_mean=mean, obs_inv_std=inv_std,
-                   obs_clip=3.0e38, action_low=low, action_high=high, action_scale=np.ones(n), action_offset=np.zeros(n))
+                   obs_clip=3.0e38, action_low=low, action_high=high, action_scale=scale, action_offset=np.zeros(n),
+                   squash=squash)
 
 
 def _hex(v) -> str:
@@ -196,6 +207,7 @@ inline constexpr {name}Type {name} = {{
     {arr(spec.action_high)},
     {arr(spec.action_scale)},
     {arr(spec.action_offset)},
+    kestrel::policy::Squash::{spec.squash},
 }};
 
 }}  // namespace {namespace}
@@ -214,3 +226,53 @@ def export_onnx(spec: MlpSpec, path: str) -> str:
     torch.onnx.export(module, (dummy,), path, input_names=["obs"], output_names=["action"],
                       dynamic_axes={"obs": {0: "batch"}, "action": {0: "batch"}}, dynamo=False)
     return path
+
+
+def main(argv=None) -> int:
+    """python -m kestrel.export (--rsl-rl CKPT | --sb3 MODEL.zip [--vecnormalize PKL]) --header OUT.hpp"""
+    import argparse
+
+    p = argparse.ArgumentParser(prog="python -m kestrel.export", description=main.__doc__)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--rsl-rl", help="rsl-rl-lib checkpoint (.pt with actor_state_dict)")
+    src.add_argument("--sb3", help="Stable-Baselines3 model (.zip)")
+    p.add_argument("--vecnormalize", help="SB3 VecNormalize statistics (.pkl) saved with the model")
+    p.add_argument("--low", type=float, default=-10.0, help="action clip low (rsl_rl; SB3 reads its action space)")
+    p.add_argument("--high", type=float, default=10.0, help="action clip high")
+    p.add_argument("--activation", default="elu", help="rsl_rl actor activation (default elu)")
+    p.add_argument("--squash", default="none", choices=sorted(SQUASH), help="rsl_rl: tanh if trained with --squash")
+    p.add_argument("--action-scale", help="rsl_rl: comma-separated scale after the squash (make_vec action_scale)")
+    p.add_argument("--no-obs-normalizer", action="store_true", help="rsl_rl: trained without observation normalisation")
+    p.add_argument("--header", required=True, help="C++ header to write")
+    p.add_argument("--name", default="kPolicy", help="name of the constexpr MlpParams in the header")
+    p.add_argument("--onnx", help="also write an ONNX graph here")
+    a = p.parse_args(argv)
+    if a.rsl_rl:
+        import torch
+
+        ck = torch.load(a.rsl_rl, map_location="cpu", weights_only=False)
+        scale = [float(x) for x in a.action_scale.split(",")] if a.action_scale else None
+        spec = from_rsl_rl(ck["actor_state_dict"], a.low, a.high, activation=a.activation, squash=a.squash,
+                           action_scale=scale, obs_normalizer=not a.no_obs_normalizer)
+    else:
+        from stable_baselines3 import PPO
+
+        model = PPO.load(a.sb3, device="cpu")
+        vn = None
+        if a.vecnormalize:
+            import pickle
+
+            with open(a.vecnormalize, "rb") as f:
+                vn = pickle.load(f)
+        spec = from_sb3(model, vn)
+    write_header(spec, a.header, name=a.name)
+    print(f"{a.header}: {a.name} = MlpParams<{spec.obs_dim}, {spec.hidden[0]}, {spec.hidden[1]}, {spec.action_dim}> "
+          f"({spec.activation})")
+    if a.onnx:
+        export_onnx(spec, a.onnx)
+        print(f"{a.onnx}: ONNX graph of the same function")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -53,7 +53,7 @@ def test_unknown_ids_and_fields():
         kestrel.make_vec("Nope-v0")
     with pytest.raises(ValueError, match='controller: unknown controller "nope"; known: direct_motor_control'):
         kestrel.make_task("position_setpoint_task", controller="nope")
-    with pytest.raises(ValueError, match="env.num_envs: expected a positive integer"):
+    with pytest.raises(ValueError, match="env.num_envs: expected an integer in"):
         kestrel.make_task("position_setpoint_task", env={"name": "empty", "num_envs": -3})
     with pytest.raises(ValueError, match="env.bogus: unknown field; allowed: name"):
         kestrel.make_task("position_setpoint_task", env={"name": "empty", "bogus": 1})

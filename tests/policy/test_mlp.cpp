@@ -72,6 +72,7 @@ void reference_forward(const TestMlp& p, const real* obs, double* y) {
   for (int o = 0; o < 4; ++o) {
     double a = p.output.bias[o];
     for (int i = 0; i < 64; ++i) a += static_cast<double>(p.output.weight[o][i]) * h2[i];
+    if (p.output_squash == pl::Squash::tanh) a = std::tanh(a);
     a = a < p.action_low[o] ? p.action_low[o] : (a > p.action_high[o] ? p.action_high[o] : a);
     y[o] = p.action_offset[o] + p.action_scale[o] * a;
   }
@@ -108,9 +109,11 @@ KTEST(PolicyMath, ExpAndTanhMatchTheLibrary) {
 }
 
 KTEST(PolicyMlp, ForwardMatchesDoubleReference) {
-  for (int a = 0; a < 3; ++a) {
-    const pl::Activation act = static_cast<pl::Activation>(a);
+  for (int a = 0; a < 4; ++a) {
+    // tanh, ELU, ReLU; then ELU with a tanh-squashed output (rsl_rl with squash, scaled actions).
+    const pl::Activation act = static_cast<pl::Activation>(a < 3 ? a : 1);
     random_mlp(g_mlp, act, 11);
+    g_mlp.output_squash = a == 3 ? pl::Squash::tanh : pl::Squash::none;
     KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::ok);
     RngStream r(12, 0, kPurposeUser);
     double worst = 0;
@@ -131,6 +134,7 @@ KTEST(PolicyMlp, ForwardMatchesDoubleReference) {
     }
     KEXPECT_LT(worst, 1e-5);
   }
+  g_mlp.output_squash = pl::Squash::none;
 }
 
 KTEST(PolicyMlp, RefusesNonFiniteInputsAndWeights) {

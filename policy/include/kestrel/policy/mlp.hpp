@@ -32,6 +32,10 @@ enum class Activation : std::uint8_t {
   relu = 2,
 };
 
+/// What the output layer's mean goes through before the action clip: nothing (SB3, rsl_rl's
+/// default: the learner clips), or tanh (a squashed Gaussian, into [-1, 1]).
+enum class Squash : std::uint8_t { none = 0, tanh = 1 };
+
 template <int kIn, int kOut>
 struct DenseLayer {
   real weight[kOut][kIn];  // PyTorch's nn.Linear layout: weight[out][in]
@@ -52,12 +56,13 @@ struct MlpParams {
   DenseLayer<kObs, kH1> hidden1;
   DenseLayer<kH1, kH2> hidden2;
   DenseLayer<kH2, kAct> output;  // the Gaussian's mean (deterministic action)
-  // Action mapping: action = offset + scale * clamp(y, low, high) (the learner's clip to the action
-  // space, then the task's scaling into controller units).
+  // Action mapping: action = offset + scale * clamp(squash(y), low, high) (the learner's squash or
+  // clip to the action space, then the task's scaling into controller units).
   real action_low[kAct];
   real action_high[kAct];
   real action_scale[kAct];
   real action_offset[kAct];
+  Squash output_squash;  // last, so that a zero-initialised (static) network has none
 };
 
 namespace detail {
@@ -109,6 +114,7 @@ template <int kObs, int kH1, int kH2, int kAct>
 [[nodiscard]] Status validate_mlp(const MlpParams<kObs, kH1, kH2, kAct>& p) {
   if (p.activation != Activation::tanh && p.activation != Activation::elu && p.activation != Activation::relu)
     return Status::invalid_argument;
+  if (p.output_squash != Squash::none && p.output_squash != Squash::tanh) return Status::invalid_argument;
   if (!all_finite(p.obs_mean, kObs) || !all_finite(p.obs_inv_std, kObs) || !(p.obs_clip > 0) || !is_finite(p.obs_clip))
     return Status::invalid_argument;
   for (int i = 0; i < kObs; ++i)
@@ -134,6 +140,7 @@ struct MlpView {
   real obs_clip;
   const real *w1, *b1, *w2, *b2, *w3, *b3;  // row-major weight[out][in]
   const real *action_low, *action_high, *action_scale, *action_offset;
+  Squash output_squash;
 };
 
 template <int kObs, int kH1, int kH2, int kAct>
@@ -141,7 +148,7 @@ inline MlpView view_of(const MlpParams<kObs, kH1, kH2, kAct>& p) {
   return MlpView{kObs, kH1, kH2, kAct, p.activation, p.obs_mean, p.obs_inv_std, p.obs_clip,
                  &p.hidden1.weight[0][0], p.hidden1.bias, &p.hidden2.weight[0][0], p.hidden2.bias,
                  &p.output.weight[0][0], p.output.bias, p.action_low, p.action_high, p.action_scale,
-                 p.action_offset};
+                 p.action_offset, p.output_squash};
 }
 
 /// One inference over a view; `scratch` holds obs_dim + h1 + h2 + action_dim reals. A non-finite
@@ -164,8 +171,10 @@ __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, 
   for (int i = 0; i < v.h2; ++i) a2[i] = detail::activate(v.activation, a2[i]);
   detail::dense(v.w3, v.b3, v.h2, v.action_dim, a2, y);
   if (!all_finite(y, v.action_dim)) return Status::non_finite_input;
-  for (int i = 0; i < v.action_dim; ++i)
-    action[i] = v.action_offset[i] + v.action_scale[i] * clamp(y[i], v.action_low[i], v.action_high[i]);
+  for (int i = 0; i < v.action_dim; ++i) {
+    const real u = v.output_squash == Squash::tanh ? tanh_det(y[i]) : y[i];
+    action[i] = v.action_offset[i] + v.action_scale[i] * clamp(u, v.action_low[i], v.action_high[i]);
+  }
   return Status::ok;
 }
 

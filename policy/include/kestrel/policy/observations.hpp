@@ -3,6 +3,8 @@
 // observations with these; the firmware builds them from its state estimate).
 #pragma once
 
+#include <cmath>
+
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
 #include "kestrel/kernel/types.hpp"
@@ -21,6 +23,22 @@ inline void position_setpoint_observation(const RigidBodyState& st, const Vec3& 
   const Vec3 v_b = rotate_inverse(st.orientation_wb, st.linvel_w);
   for (int k = 0; k < 3; ++k) obs[7 + k] = static_cast<float>(v_b[k]);
   for (int k = 0; k < 3; ++k) obs[10 + k] = static_cast<float>(st.angvel_b[k]);
+}
+
+/// The same with the position error rotated about world z into the vehicle (yaw-only) frame, the
+/// frame Lee velocity control reads its command in (the Python env's vehicle_frame_obs option):
+/// [c s; -s c] e with (c, s) the yaw's cosine and sine taken from the observation's own quaternion
+/// as the normalised (w^2 + x^2 - y^2 - z^2, 2 (w z + x y)) (no atan2: identical bits on every
+/// target). A yaw-less attitude (both terms 0: pointing straight up or down) leaves e as it is.
+inline void position_setpoint_observation_vehicle_frame(const RigidBodyState& st, const Vec3& target_w, float* obs) {
+  position_setpoint_observation(st, target_w, obs);
+  const float x = obs[3], y = obs[4], z = obs[5], w = obs[6];
+  const float a = w * w + x * x - y * y - z * z, b = 2 * (w * z + x * y);
+  const float n = std::sqrt(a * a + b * b);
+  if (!(n > 0)) return;
+  const float c = a / n, s = b / n, ex = obs[0], ey = obs[1];
+  obs[0] = c * ex + s * ey;
+  obs[1] = -s * ex + c * ey;
 }
 
 }  // namespace kestrel::policy
