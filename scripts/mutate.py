@@ -141,7 +141,7 @@ def main():
           f"drawn with seed {a.seed})", flush=True)
     if a.list:
         for m in chosen:
-            print(f"  {m['file']}:{m['line']}  {m['op']}: {m['orig']!r} -> {m['new']!r}")
+            print(f"  {m['file']}:{m['line']}:{m['col'] + 1}  {m['op']}: {m['orig']!r} -> {m['new']!r}")
         return
     if not os.path.exists(os.path.join(BUILD, "build.ninja")):
         subprocess.run(["cmake", "--preset", "host", "-B", BUILD, "-DKESTREL_MCU_TESTS=OFF", "-DKESTREL_INSTALL=OFF",
@@ -165,7 +165,7 @@ def main():
             restore(m)
         m["verdict"] = verdict
         results.append(m)
-        print(f"[{i}/{len(chosen)}] {verdict:16s} {m['file']}:{m['line']}  {m['op']}: {m['orig']!r} -> {m['new']!r} "
+        print(f"[{i}/{len(chosen)}] {verdict:16s} {m['file']}:{m['line']}:{m['col'] + 1}  {m['op']}: {m['orig']!r} -> {m['new']!r} "
               f"({time.time() - t0:.0f} s)", flush=True)
     sh(build, 1800)  # leave build/mutate matching the tree
     counted = [m for m in results if m["verdict"] != "stillborn"]
@@ -176,13 +176,13 @@ def main():
                f"({len(results) - len(counted)} did not compile; seed {a.seed}, sample {a.sample})")
     print("mutate.py: " + summary)
     for m in survived:
-        print(f"  survived: {m['file']}:{m['line']}  {m['op']}: {m['orig']!r} -> {m['new']!r}")
+        print(f"  survived: {m['file']}:{m['line']}:{m['col'] + 1}  {m['op']}: {m['orig']!r} -> {m['new']!r}")
     if a.report:
         with open(a.report, "a") as f:
             f.write(f"\n### Run of {time.strftime('%Y-%m-%d')} (`scripts/mutate.py --sample {a.sample} --seed {a.seed}`)\n\n")
             f.write(f"Score: {summary}.\n\n| | mutant | where | verdict |\n|---|---|---|---|\n")
             for i, m in enumerate(results, 1):
-                f.write(f"| {i} | {m['op']}: `{m['orig']}` -> `{m['new']}` | `{m['file']}:{m['line']}` | {m['verdict']} |\n")
+                f.write(f"| {i} | {m['op']}: `{m['orig']}` -> `{m['new']}` | `{m['file']}:{m['line']}:{m['col'] + 1}` | {m['verdict']} |\n")
     sys.exit(0)
 
 
