@@ -27,8 +27,12 @@ cmake --preset host-fuzz
 cmake --build --preset host-fuzz -j "$jobs"
 ctest --preset host-fuzz
 echo "== ThreadSanitizer (multi-threaded world/task/planar step)"
-# Builds only the sim test executables and runs the tests that step with >= 2 threads (the
-# test preset's name filter).
+# Builds only the task and backend test executables (the sim library under TSan dominates the
+# cost) and runs their tests that step with >= 2 threads (the test preset's name filter): rigid
+# World through SimulatorRigid and the tasks, planar, navigation/custom/goal-box tasks. The World
+# hash tests of kestrel_sim_tests (SimWorld/SimSensors/SimTerrain/SimBatchStep.*Threads*) also pass
+# under TSan but are left out for time; kestrel_sim_mt_heap_tests does not build at -O1
+# (-Wmismatched-new-delete in its operator delete) and replaces malloc, which TSan intercepts.
 cmake --preset host-tsan
 cmake --build --preset host-tsan -j "$jobs"
 ctest --preset host-tsan -j "$jobs"
