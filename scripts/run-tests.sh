@@ -2,7 +2,9 @@
 # Builds and runs every test: the host tests (GoogleTest), the same core tests and the firmware
 # example on the emulated Cortex-M4F under QEMU (run from the host ctest), and the host tests
 # again under AddressSanitizer + UBSan, then the Python package (python/: built into .venv/ with
-# pip, build tree cached in build/python/) and its tests (pytest python/tests). Installs missing
+# pip, build tree cached in build/python/) and its tests (pytest python/tests), the fuzz targets'
+# regression runs (clang + libFuzzer, tests/fuzz/) and the multi-threaded step under
+# ThreadSanitizer (only those tests' executables are built). Installs missing
 # Debian packages and the pinned Python packages first.
 set -eu
 cd "$(dirname "$0")/.."
@@ -18,6 +20,22 @@ echo "== host with AddressSanitizer + UBSan"
 cmake --preset host-asan
 cmake --build --preset host-asan -j "$jobs"
 ctest --preset host-asan -j "$jobs"
+echo "== fuzz regression (clang + libFuzzer)"
+# The five fuzz targets over their committed corpora, a fixed number of runs from a fixed seed
+# (tests/fuzz/CMakeLists.txt); long campaigns: scripts/run-fuzz.sh.
+cmake --preset host-fuzz
+cmake --build --preset host-fuzz -j "$jobs"
+ctest --preset host-fuzz
+echo "== ThreadSanitizer (multi-threaded world/task/planar step)"
+# Builds only the task and backend test executables (the sim library under TSan dominates the
+# cost) and runs their tests that step with >= 2 threads (the test preset's name filter): rigid
+# World through SimulatorRigid and the tasks, planar, navigation/custom/goal-box tasks. The World
+# hash tests of kestrel_sim_tests (SimWorld/SimSensors/SimTerrain/SimBatchStep.*Threads*) also pass
+# under TSan but are left out for time; kestrel_sim_mt_heap_tests does not build at -O1
+# (-Wmismatched-new-delete in its operator delete) and replaces malloc, which TSan intercepts.
+cmake --preset host-tsan
+cmake --build --preset host-tsan -j "$jobs"
+ctest --preset host-tsan -j "$jobs"
 echo "== Python"
 # Non-editable install of the package (scikit-build-core: build/python/, incremental), then pytest.
 # The determinism test compares with the CLI built above (build/host/sim/kestrel).

@@ -69,8 +69,10 @@ Status bvh_build(const Aabb* prim_boxes, std::uint32_t n, const BvhBuildParams& 
       Bin bins[kBins];
       const real scale = static_cast<real>(kBins) / extent;
       auto bin_of = [&](std::uint32_t prim) {
-        const int b = static_cast<int>((prim_boxes[prim].centroid(axis) - cbox.lo[axis]) * scale);
-        return b < 0 ? 0 : (b >= kBins ? kBins - 1 : b);
+        // Compared in floating point before the conversion: a denormal extent makes scale inf and
+        // 0 * inf NaN, whose conversion to int is undefined (fuzz_mesh); NaN goes to bin 0.
+        const real t = (prim_boxes[prim].centroid(axis) - cbox.lo[axis]) * scale;
+        return t >= static_cast<real>(kBins) ? kBins - 1 : (t > 0 ? static_cast<int>(t) : 0);
       };
       for (std::uint32_t i = task.begin; i < task.end; ++i) {
         Bin& b = bins[bin_of(bvh.prim_index[i])];
