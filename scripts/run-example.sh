@@ -1,9 +1,9 @@
 #!/bin/sh
 # Main job:
-#  1. the closed-loop firmware example (Lee position controller -> sequential-desaturation
+#  1. the closed-loop firmware examples (Lee position controller -> sequential-desaturation
 #     allocation -> motor model -> rigid-body plant) on the host and on an emulated Cortex-M4F
 #     (QEMU mps2-an386, -icount shift=0), printing tracking error, cost per control step and the
-#     image's flash/RAM use;
+#     image's flash/RAM use; then the trained position policy flying the same vehicle beside Lee;
 #  2. the simulation harness's embedded default scenario (`kestrel run`: 1024 quadrotors flying
 #     position setpoints through the forest), printing its summary and state hash and writing
 #     CSV logs and a trajectory plot to build/kestrel-run/.
@@ -15,10 +15,10 @@ jobs=$(nproc 2>/dev/null || echo 2)
 
 echo "== building (host)"
 cmake --preset host >/dev/null
-cmake --build --preset host --target kestrel_firmware_host kestrel -j "$jobs"
+cmake --build --preset host --target kestrel_firmware_host kestrel_firmware_policy_host kestrel -j "$jobs"
 echo "== building (Cortex-M4F)"
 cmake --preset cortex-m4f >/dev/null
-cmake --build --preset cortex-m4f --target kestrel_firmware -j "$jobs"
+cmake --build --preset cortex-m4f --target kestrel_firmware kestrel_firmware_policy -j "$jobs"
 
 echo
 echo "== host"
@@ -28,6 +28,13 @@ echo "== emulated Cortex-M4F"
 elf=build/cortex-m4f/platform/firmware/kestrel_firmware.elf
 sh platform/cortex-m/check-image.sh arm-none-eabi-nm arm-none-eabi-size "$elf" platform/cortex-m/heap-symbols.txt
 sh platform/cortex-m/run-qemu.sh --machine mps2-an386 --elf "$elf" --name kestrel_firmware --timeout 300
+
+echo
+echo "== the trained position policy (policy/mlp.hpp, platform/firmware/position_policy.hpp) beside Lee"
+./build/host/platform/firmware/kestrel_firmware_policy_host
+elf=build/cortex-m4f/platform/firmware/kestrel_firmware_policy.elf
+sh platform/cortex-m/check-image.sh arm-none-eabi-nm arm-none-eabi-size "$elf" platform/cortex-m/heap-symbols.txt
+sh platform/cortex-m/run-qemu.sh --machine mps2-an386 --elf "$elf" --name kestrel_firmware_policy --timeout 300
 
 echo
 echo "== simulation harness: kestrel run (embedded default scenario)"
