@@ -64,8 +64,8 @@ namespace {
 /// Bytes one environment's storage takes (World::bytes_per_env, and the estimate made before
 /// anything is allocated: both are computed here so they cannot drift apart).
 std::size_t env_bytes(const WorldConfig& cfg, int obstacle_capacity, int height_points) {
-  const std::size_t per_robot = sizeof(RigidBodyState) + sizeof(ControllerState) + sizeof(al::AllocatorState) +
-                                sizeof(al::MotorModelState) + 2 * kMaxActionDim * sizeof(real) + 3 * sizeof(Vec3) + 1;
+  const std::size_t per_robot = sizeof(RigidBodyState) + sizeof(robots::MultirotorState) +
+                                2 * kMaxActionDim * sizeof(real) + 3 * sizeof(Vec3) + 1;
   const std::size_t per_env = 2 * sizeof(RngStream) + 2 * sizeof(Vec3) + 6 * sizeof(int) + sizeof(std::uint32_t) +
                               sizeof(EnvStats) + static_cast<std::size_t>(obstacle_capacity) * sizeof(Obstacle);
   std::size_t sensor_per_robot = 0;
@@ -587,7 +587,8 @@ void World::robot_dynamics(int env, int robot, std::size_t i, bool use_new_actio
     }
   }
   const real h = dt / static_cast<real>(cfg_.sim.substeps);
-  for (int s = 0; s < cfg_.sim.substeps; ++s) (void)step_rigid_body(body_model_, st, w, h, extra_force_w);  // non-finite input is held (latched in st)
+  // A non-finite input is refused and the state held (step_rigid_body's contract).
+  for (int s = 0; s < cfg_.sim.substeps; ++s) (void)step_rigid_body(body_model_, st, w, h, extra_force_w);
 }
 
 void World::move_obstacles(int env) {
