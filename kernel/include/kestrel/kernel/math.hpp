@@ -157,15 +157,19 @@ inline void sin_cos(real x, real& s, real& c) {
 /// below 0.625 and 1 - 2 / (e^2x + 1) above): about 1 ulp of float. Double builds (host only) use
 /// the library.
 namespace detail {
-inline float exp_f32(float x) {
-  if (!(x == x)) return x;                    // NaN
-  if (x > 88.72283905206835f) return std::numeric_limits<float>::infinity();
-  if (x < -103.972077083991796f) return 0.0f;
+/// exp_f32's main path, for x in [-103.97..., 88.72...] (no NaN): callers that know their range
+/// (tanh_f32's large branch, the ELU's negative side) skip the checks, with the same bits.
+__attribute__((always_inline)) inline float exp_f32_reduced(float x) {
   constexpr float kLog2e = 1.44269504088896341f;
-  float zf = kLog2e * x + 0.5f;
+  const float zf = kLog2e * x + 0.5f;
+  // n = floor(zf): truncation, then one down where that rounded up (zf < 0, not an integer; for
+  // zf >= 0 the truncation is never above zf, so the test needs no sign check).
   int n = static_cast<int>(zf);
-  if (zf < 0 && static_cast<float>(n) != zf) --n;  // floor
-  const float fn = static_cast<float>(n);
+  float fn = static_cast<float>(n);
+  if (fn > zf) {
+    --n;
+    fn = static_cast<float>(n);
+  }
   float r = x - fn * 0.693359375f;
   r = r - fn * -2.12194440e-4f;
   const float z = r * r;
@@ -183,21 +187,47 @@ inline float exp_f32(float x) {
   if (n < -126) return y * pow2(-126) * pow2(n + 126 < -126 ? -126 : n + 126);
   return y * pow2(n);
 }
-inline float tanh_f32(float x) {
+inline float exp_f32(float x) {
+  if (!(x == x)) return x;                    // NaN
+  if (x > 88.72283905206835f) return std::numeric_limits<float>::infinity();
+  if (x < -103.972077083991796f) return 0.0f;
+  return exp_f32_reduced(x);
+}
+/// e^x for x <= 0 or NaN (the ELU's negative side): exp_f32 without its overflow test, which no
+/// such x passes; the same bits.
+__attribute__((always_inline)) inline float exp_f32_nonpositive(float x) {
+  if (x >= -103.972077083991796f) return exp_f32_reduced(x);  // false for NaN
+  return x == x ? 0.0f : x;
+}
+/// tanh for |x| > 0.625 or NaN: 1 - 2 / (e^2|x| + 1) with the sign of x, +-1 beyond 9.01.
+inline float tanh_f32_large(float x) {
   const bool neg = x < 0;
   const float ax = neg ? -x : x;
-  float t;
-  if (ax > 0.625f) {
-    if (ax > 9.01091334f) return neg ? -1.0f : 1.0f;  // tanh rounds to 1 in float
-    const float e = exp_f32(2 * ax);
-    t = 1.0f - 2.0f / (e + 1.0f);
-  } else {
-    if (!(ax == ax)) return x;
-    const float z = ax * ax;
-    t = ((((-5.70498872745e-3f * z + 2.06390887954e-2f) * z - 5.37397155531e-2f) * z + 1.33314422036e-1f) * z -
-         3.33332819422e-1f) * z * ax + ax;
-  }
+  if (!(ax == ax)) return x;                        // NaN
+  if (ax > 9.01091334f) return neg ? -1.0f : 1.0f;  // tanh rounds to 1 in float
+  const float e = exp_f32_reduced(2 * ax);          // 2|x| in (1.25, 18.03]: no range checks
+  const float t = 1.0f - 2.0f / (e + 1.0f);
   return neg ? -t : t;
+}
+/// tanh_f32's polynomial branch: its bound and coefficients, as values so that a loop can hold
+/// them in registers (policy/mlp.hpp does; the arithmetic is the same with literals).
+struct TanhSmall {
+  float max_abs, c5, c4, c3, c2, c1;
+};
+inline constexpr TanhSmall kTanhSmall{0.625f, -5.70498872745e-3f, 2.06390887954e-2f, 5.37397155531e-2f,
+                                      1.33314422036e-1f, 3.33332819422e-1f};
+/// |x| <= 0.625: the odd polynomial, evaluated on x itself. z = x * x and the polynomial in z are
+/// the same for -x, and the last two steps ((p z) x, then + x) see every operand negated, which
+/// round-to-nearest maps to exactly the negated result: tanh(-x) = -tanh(x) bit for bit, the bits
+/// of evaluating on |x| and negating (the form this had before), without its sign tests. -0 gives
+/// +0 both ways: (p(0) 0) (-0) + (-0) = (-0)(-0) + (-0) = +0 + -0 = +0. Everything else (|x| >
+/// 0.625, NaN) goes to tanh_f32_large.
+__attribute__((always_inline)) inline float tanh_f32(float x, const TanhSmall& c = kTanhSmall) {
+  if (std::fabs(x) <= c.max_abs) {  // false for NaN
+    const float z = x * x;
+    return ((((c.c5 * z + c.c4) * z - c.c3) * z + c.c2) * z - c.c1) * z * x + x;
+  }
+  return tanh_f32_large(x);
 }
 }  // namespace detail
 

@@ -13,6 +13,11 @@
 // P5): policy -> action -> robots::multirotor_step, so one policy drives lee_velocity on the MCU
 // and in the simulator alike.
 //
+// On the Cortex-M4F/M7 the dense layers run as VFP assembly (detail::dense_vfp: chained VMLA, one
+// rounding after the multiply and one after the add, as the portable code, so the same bits;
+// tests/policy/test_mlp.cpp checks them against the plain loop), about 2.6x fewer instructions
+// per inference (bench/results/cortex-m4f/control.csv, the mlp_forward rows).
+//
 // Weights live wherever the caller puts them: a `const MlpParams` generated into flash by
 // python/kestrel/export.py (hex-float literals), or static storage filled at set-up.
 #pragma once
@@ -66,6 +71,12 @@ struct MlpParams {
 };
 
 namespace detail {
+// Cortex-M4F/M7 (single-precision VFP, float core): the dense layers in VFP assembly (dense_vfp).
+#if defined(__ARM_ARCH_7EM__) && defined(__ARM_FP) && (__ARM_FP & 4) && \
+    !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
+#define KESTREL_MLP_ARM_VFP 1
+#endif
+
 inline real activate(Activation a, real x) {
   switch (a) {
     case Activation::tanh: return tanh_det(x);
@@ -74,12 +85,43 @@ inline real activate(Activation a, real x) {
   }
   return x;
 }
+// activate() over an array, one loop per kind (the kind does not change within a layer); the same
+// function of each element. Float builds call the pieces of tanh_det / exp_det that the element
+// can reach (kernel/math.hpp: ELU's exp of x <= 0 skips the overflow test, which no such x passes),
+// with the same bits.
+__attribute__((always_inline)) inline void activate_all(Activation a, real* v, int n) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  for (int i = 0; i < n; ++i) v[i] = activate(a, v[i]);
+#else
+  switch (a) {
+    case Activation::tanh: {
+      kestrel::detail::TanhSmall c = kestrel::detail::kTanhSmall;
+#if defined(KESTREL_MLP_ARM_VFP)
+      // Empty asm: the values are unchanged, but GCC can no longer reload them from the literal
+      // pool on every iteration, so they stay in registers for the whole loop.
+      __asm__("" : "+t"(c.max_abs), "+t"(c.c5), "+t"(c.c4), "+t"(c.c3), "+t"(c.c2), "+t"(c.c1));
+#endif
+      for (int i = 0; i < n; ++i) v[i] = kestrel::detail::tanh_f32(v[i], c);
+      return;
+    }
+    case Activation::elu:
+      for (int i = 0; i < n; ++i)
+        if (!(v[i] > 0)) v[i] = kestrel::detail::exp_f32_nonpositive(v[i]) - 1;
+      return;
+    case Activation::relu:
+      for (int i = 0; i < n; ++i)
+        if (!(v[i] > 0)) v[i] = 0;
+      return;
+  }
+#endif
+}
+
 // y = b + W x, each output summed in input order (-ffp-contract=off: no fused multiply-add on any
 // target). Four outputs at a time share each load of x[i] (a 64-64 network is ~5,200
 // multiply-adds: on the Cortex-M4F the loads, not the FPU, set the cost); the sums and their order
 // are those of the plain loop, so the bits are too.
-__attribute__((always_inline)) inline void dense(const real* w, const real* b, int in, int out, const real* x,
-                                                 real* y) {
+__attribute__((always_inline)) inline void dense_portable(const real* w, const real* b, int in, int out,
+                                                          const real* x, real* y) {
   const int groups = out / 4;
   for (int g = 0; g < groups; ++g) {
     const int o = 4 * g;
@@ -106,6 +148,163 @@ __attribute__((always_inline)) inline void dense(const real* w, const real* b, i
     for (int i = 0; i < in; ++i) acc += row[i] * x[i];
     y[o] = acc;
   }
+}
+
+#if defined(KESTREL_MLP_ARM_VFP)
+// Cortex-M4F/M7 (single-precision VFP): dense_portable's sums in hand-written VFP code, four rows
+// of W at a time, each output summed in input order from its bias. Two instructions differ from
+// what GCC emits, neither of them in the arithmetic:
+//  - VMLA.F32 Sd, Sn, Sm is the *chained* (non-fused) multiply-accumulate: the product rounded to
+//    float, then the sum rounded (Armv7-M ARM, VMLA pseudocode: S[d] = FPAdd(S[d], FPMul(S[n],
+//    S[m]))); VFMA is the fused one and is never used here. So one VMLA gives exactly the bits of
+//    `acc += w * x` compiled under -ffp-contract=off (a VMUL, then a VADD), in one instruction
+//    instead of two. GCC emits VMLA only when contracting, hence the asm.
+//  - VLDM loads up to 12 consecutive floats in one instruction, where GCC emits one VLDR each.
+// Per block of 12 inputs: x in s4-s15 (one VLDM), then for each row its 12 weights in s16-s27 (one
+// VLDM) and 12 VMLAs into the row's accumulator (s0-s3); then blocks of 4 and single inputs for
+// the rest of `in`. 55 instructions per 48 multiply-adds, against 16 per 4 in the compiled loop.
+// Rows are contiguous (weight[out][in]), so a group's last row pointer ends on the next group's
+// first row.
+__attribute__((always_inline)) inline void dense_vfp(const real* w, const real* b, int in, int groups, const real* x,
+                                                     real* y) {
+  const real* r1;
+  const real* r2;
+  const real* r3;
+  int n;
+  __asm__ __volatile__(
+      "0:\n\t"
+      "add.w %[r1], %[r0], %[in], lsl #2\n\t"
+      "add.w %[r2], %[r1], %[in], lsl #2\n\t"
+      "add.w %[r3], %[r2], %[in], lsl #2\n\t"
+      "vldmia %[b]!, {s0-s3}\n\t"
+      // n counts the inputs left minus the block size: each block loop ends on subs + branch.
+      "subs %[n], %[in], #12\n\t"
+      "blt 2f\n"
+      "1:\n\t"
+      "vldmia %[x]!, {s4-s15}\n\t"
+      "vldmia %[r0]!, {s16-s27}\n\t"
+      "vmla.f32 s0, s16, s4\n\t"
+      "vmla.f32 s0, s17, s5\n\t"
+      "vmla.f32 s0, s18, s6\n\t"
+      "vmla.f32 s0, s19, s7\n\t"
+      "vmla.f32 s0, s20, s8\n\t"
+      "vmla.f32 s0, s21, s9\n\t"
+      "vmla.f32 s0, s22, s10\n\t"
+      "vmla.f32 s0, s23, s11\n\t"
+      "vmla.f32 s0, s24, s12\n\t"
+      "vmla.f32 s0, s25, s13\n\t"
+      "vmla.f32 s0, s26, s14\n\t"
+      "vmla.f32 s0, s27, s15\n\t"
+      "vldmia %[r1]!, {s16-s27}\n\t"
+      "vmla.f32 s1, s16, s4\n\t"
+      "vmla.f32 s1, s17, s5\n\t"
+      "vmla.f32 s1, s18, s6\n\t"
+      "vmla.f32 s1, s19, s7\n\t"
+      "vmla.f32 s1, s20, s8\n\t"
+      "vmla.f32 s1, s21, s9\n\t"
+      "vmla.f32 s1, s22, s10\n\t"
+      "vmla.f32 s1, s23, s11\n\t"
+      "vmla.f32 s1, s24, s12\n\t"
+      "vmla.f32 s1, s25, s13\n\t"
+      "vmla.f32 s1, s26, s14\n\t"
+      "vmla.f32 s1, s27, s15\n\t"
+      "vldmia %[r2]!, {s16-s27}\n\t"
+      "vmla.f32 s2, s16, s4\n\t"
+      "vmla.f32 s2, s17, s5\n\t"
+      "vmla.f32 s2, s18, s6\n\t"
+      "vmla.f32 s2, s19, s7\n\t"
+      "vmla.f32 s2, s20, s8\n\t"
+      "vmla.f32 s2, s21, s9\n\t"
+      "vmla.f32 s2, s22, s10\n\t"
+      "vmla.f32 s2, s23, s11\n\t"
+      "vmla.f32 s2, s24, s12\n\t"
+      "vmla.f32 s2, s25, s13\n\t"
+      "vmla.f32 s2, s26, s14\n\t"
+      "vmla.f32 s2, s27, s15\n\t"
+      "vldmia %[r3]!, {s16-s27}\n\t"
+      "vmla.f32 s3, s16, s4\n\t"
+      "vmla.f32 s3, s17, s5\n\t"
+      "vmla.f32 s3, s18, s6\n\t"
+      "vmla.f32 s3, s19, s7\n\t"
+      "vmla.f32 s3, s20, s8\n\t"
+      "vmla.f32 s3, s21, s9\n\t"
+      "vmla.f32 s3, s22, s10\n\t"
+      "vmla.f32 s3, s23, s11\n\t"
+      "vmla.f32 s3, s24, s12\n\t"
+      "vmla.f32 s3, s25, s13\n\t"
+      "vmla.f32 s3, s26, s14\n\t"
+      "vmla.f32 s3, s27, s15\n\t"
+      "subs %[n], %[n], #12\n\t"
+      "bge 1b\n"
+      "2:\n\t"
+      "adds %[n], %[n], #8\n\t"  // inputs left - 4
+      "blt 4f\n"
+      "3:\n\t"
+      "vldmia %[x]!, {s4-s7}\n\t"
+      "vldmia %[r0]!, {s16-s19}\n\t"
+      "vmla.f32 s0, s16, s4\n\t"
+      "vmla.f32 s0, s17, s5\n\t"
+      "vmla.f32 s0, s18, s6\n\t"
+      "vmla.f32 s0, s19, s7\n\t"
+      "vldmia %[r1]!, {s16-s19}\n\t"
+      "vmla.f32 s1, s16, s4\n\t"
+      "vmla.f32 s1, s17, s5\n\t"
+      "vmla.f32 s1, s18, s6\n\t"
+      "vmla.f32 s1, s19, s7\n\t"
+      "vldmia %[r2]!, {s16-s19}\n\t"
+      "vmla.f32 s2, s16, s4\n\t"
+      "vmla.f32 s2, s17, s5\n\t"
+      "vmla.f32 s2, s18, s6\n\t"
+      "vmla.f32 s2, s19, s7\n\t"
+      "vldmia %[r3]!, {s16-s19}\n\t"
+      "vmla.f32 s3, s16, s4\n\t"
+      "vmla.f32 s3, s17, s5\n\t"
+      "vmla.f32 s3, s18, s6\n\t"
+      "vmla.f32 s3, s19, s7\n\t"
+      "subs %[n], %[n], #4\n\t"
+      "bge 3b\n"
+      "4:\n\t"
+      "adds %[n], %[n], #4\n\t"  // inputs left
+      "beq 6f\n"
+      "5:\n\t"
+      "vldmia %[x]!, {s4}\n\t"
+      "vldmia %[r0]!, {s16}\n\t"
+      "vldmia %[r1]!, {s17}\n\t"
+      "vldmia %[r2]!, {s18}\n\t"
+      "vldmia %[r3]!, {s19}\n\t"
+      "vmla.f32 s0, s16, s4\n\t"
+      "vmla.f32 s1, s17, s4\n\t"
+      "vmla.f32 s2, s18, s4\n\t"
+      "vmla.f32 s3, s19, s4\n\t"
+      "subs %[n], %[n], #1\n\t"
+      "bne 5b\n"
+      "6:\n\t"
+      "vstmia %[y]!, {s0-s3}\n\t"
+      "sub.w %[x], %[x], %[in], lsl #2\n\t"  // back to x[0]
+      "mov %[r0], %[r3]\n\t"                 // the next group's first row
+      "subs %[groups], %[groups], #1\n\t"
+      "bne 0b\n\t"
+      : [r0] "+r"(w), [r1] "=&r"(r1), [r2] "=&r"(r2), [r3] "=&r"(r3), [n] "=&r"(n), [x] "+r"(x), [b] "+r"(b),
+        [y] "+r"(y), [groups] "+r"(groups)
+      : [in] "r"(in)
+      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15",
+        "s16", "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
+}
+#endif
+
+__attribute__((always_inline)) inline void dense(const real* w, const real* b, int in, int out, const real* x,
+                                                 real* y) {
+#if defined(KESTREL_MLP_ARM_VFP)
+  const int groups = out / 4;
+  if (in > 0 && groups > 0) {
+    dense_vfp(w, b, in, groups, x, y);
+    // The last out % 4 rows (none in a 64-64-4 network): the portable code.
+    const int done = 4 * groups;
+    if (done < out) dense_portable(w + done * in, b + done, in, out - done, x, y + done);
+    return;
+  }
+#endif
+  dense_portable(w, b, in, out, x, y);
 }
 }  // namespace detail
 
@@ -166,9 +365,9 @@ __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, 
     x[i] = clamp((obs[i] - v.obs_mean[i]) * v.obs_inv_std[i], -v.obs_clip, v.obs_clip);
   }
   detail::dense(v.w1, v.b1, v.obs_dim, v.h1, x, a1);
-  for (int i = 0; i < v.h1; ++i) a1[i] = detail::activate(v.activation, a1[i]);
+  detail::activate_all(v.activation, a1, v.h1);
   detail::dense(v.w2, v.b2, v.h1, v.h2, a1, a2);
-  for (int i = 0; i < v.h2; ++i) a2[i] = detail::activate(v.activation, a2[i]);
+  detail::activate_all(v.activation, a2, v.h2);
   detail::dense(v.w3, v.b3, v.h2, v.action_dim, a2, y);
   if (!all_finite(y, v.action_dim)) return Status::non_finite_input;
   for (int i = 0; i < v.action_dim; ++i) {
