@@ -321,6 +321,9 @@ class PlanarSimulator final : public Simulator {
     }
     allocate_views(c, adim, sc.lidar_beams);
     plane_z_ = ground_ ? 0_r : sc.altitude_m;
+    holds_altitude_ = !ground_;  // the multirotor flies in the plane z = simulator.altitude_m
+    altitude_m_ = ground_ ? 0_r : sc.altitude_m;
+    num_range_images_ = sc.lidar_beams > 0 ? 1 : 0;
     const std::size_t nr = static_cast<std::size_t>(num_robots());
     steer_.assign(nr, VelocitySteeringState());
     mr_state_.assign(nr, robots::MultirotorState());
@@ -420,22 +423,53 @@ class PlanarSimulator final : public Simulator {
     upper_w = ev.upper;
   }
 
-  bool set_obstacle_box(int env, int asset_class, real cx, real cy, real hx, real hy, real yaw) override {
-    if (env < 0 || env >= num_envs_) return fail("simulator planar: set_obstacle_box: env " + std::to_string(env) + " out of range");
-    if (!(std::isfinite(cx) && std::isfinite(cy) && std::isfinite(yaw) && hx > 0 && hy > 0 && std::isfinite(hx) && std::isfinite(hy)))
-      return fail("simulator planar: set_obstacle_box: expected a finite centre and yaw and positive finite half extents");
+  // The 2-D lidar as one image row. Beam k is at -fov/2 + k fov/(beams-1) (clockwise first), so
+  // column 0, the leftmost (body +y side, as the rigid images), is the last beam: read backwards.
+  RangeImage range_image(int robot, int k) const override {
+    RangeImage img;
+    if (robot < 0 || robot >= num_robots() || k != 0 || lidar_beams_ == 0) return img;
+    img.ranges = lidar_.data() + static_cast<std::size_t>(robot) * static_cast<std::size_t>(lidar_beams_) +
+                 static_cast<std::size_t>(lidar_beams_ - 1);
+    img.height = 1;
+    img.width = lidar_beams_;
+    img.row_step = 0;
+    img.col_step = -1;
+    img.max_range_m = cfg_.simulator.lidar_max_range_m;
+    img.horizontal_fov_rad = cfg_.simulator.lidar_fov_rad;
+    return img;
+  }
+
+  static Slot* first_slot(Env& ev, int asset_class) {
+    for (Slot& sl : ev.slots)
+      if (static_cast<int>(sl.class_index) == asset_class) return &sl;
+    return nullptr;
+  }
+
+  // A box's x / y footprint and yaw (its z centre and half height do not apply in the plane).
+  bool set_obstacle_boxes(int env, const ObstacleBox* boxes, int count) override {
+    const char* pre = "simulator planar: set_obstacle_boxes: ";  // a string only on a refusal: no heap in a step
+    if (env < 0 || env >= num_envs_) return fail(std::string(pre) + "env " + std::to_string(env) + " out of range");
     Env& ev = envs_[static_cast<std::size_t>(env)];
-    for (Slot& sl : ev.slots) {
-      if (static_cast<int>(sl.class_index) != asset_class) continue;
-      if (sl.shape != SlotShape::box)
-        return fail("simulator planar: set_obstacle_box: asset class " + std::to_string(asset_class) + " has circle slots, not boxes");
-      ArenaScope arena(&ev.arena);  // broad-phase buffer growth, if any, goes to the env's arena
-      set_slot(sl, cx, cy, yaw, 0, hx, hy);
-      render_lidar(env);
-      return true;
+    for (int b = 0; b < count; ++b) {  // checked first: nothing changes on a refusal (and no heap)
+      const ObstacleBox& x = boxes[b];
+      const real hx = x.half_extents_m[0], hy = x.half_extents_m[1];
+      if (!(std::isfinite(x.center_w[0]) && std::isfinite(x.center_w[1]) && std::isfinite(x.yaw_rad) && hx > 0 && hy > 0 &&
+            std::isfinite(hx) && std::isfinite(hy)))
+        return fail(std::string(pre) + "expected a finite centre and yaw and positive finite half extents");
+      const Slot* sl = first_slot(ev, x.asset_class);
+      if (sl == nullptr)
+        return fail(std::string(pre) + "asset class " + std::to_string(x.asset_class) + " has no obstacle slot (" +
+                    std::to_string(cfg_.env.assets.size()) + " asset classes)");
+      if (sl->shape != SlotShape::box)
+        return fail(std::string(pre) + "asset class " + std::to_string(x.asset_class) + " has circle slots, not boxes");
     }
-    return fail("simulator planar: set_obstacle_box: asset class " + std::to_string(asset_class) + " has no obstacle slot (" +
-                std::to_string(cfg_.env.assets.size()) + " asset classes)");
+    ArenaScope arena(&ev.arena);  // broad-phase buffer growth, if any, goes to the env's arena
+    for (int b = 0; b < count; ++b) {
+      const ObstacleBox& x = boxes[b];
+      set_slot(*first_slot(ev, x.asset_class), x.center_w[0], x.center_w[1], x.yaw_rad, 0, x.half_extents_m[0], x.half_extents_m[1]);
+    }
+    if (count > 0) render_lidar(env);
+    return true;
   }
 
   std::uint64_t step_heap_fallbacks() const override {

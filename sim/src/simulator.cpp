@@ -66,6 +66,7 @@ void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar
   quat_xyzw_.assign(4 * n, 0);
   euler_xyz_.assign(3 * n, 0);
   lin_vel_b_.assign(3 * n, 0);
+  lin_vel_w_.assign(3 * n, 0);
   ang_vel_b_.assign(3 * n, 0);
   contact_w_.assign(3 * n, 0);
   wrench_b_.assign(6 * n, 0);
@@ -81,14 +82,20 @@ void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar
   for (int e = 0; e < num_envs_; ++e) rng_push_[static_cast<std::size_t>(e)] = RngStream(cfg.seed, static_cast<std::uint32_t>(e), kPurposePush);
 }
 
-void Simulator::write_state_view(std::size_t i, const RigidBodyState& s) {
+void Simulator::write_euler_view(std::size_t i) const {
+  const real* q = &quat_xyzw_[4 * i];
+  const Vec3 e = euler_xyz_two_pi(quat_from_xyzw(q[0], q[1], q[2], q[3]));
+  for (int k = 0; k < 3; ++k) euler_xyz_[3 * i + k] = wrap_pi(e[k]);
+}
+
+void Simulator::write_state_view(std::size_t i, const RigidBodyState& s, bool with_euler) {
   for (int k = 0; k < 3; ++k) pos_w_[3 * i + k] = s.position_w[k];
   const auto& c = s.orientation_wb.coeffs();  // Eigen stores x, y, z, w
   for (int k = 0; k < 4; ++k) quat_xyzw_[4 * i + k] = c[k];
-  const Vec3 e = euler_xyz_two_pi(s.orientation_wb);
-  for (int k = 0; k < 3; ++k) euler_xyz_[3 * i + k] = wrap_pi(e[k]);
+  if (with_euler) write_euler_view(i);
   const Vec3 vb = rotate_inverse(s.orientation_wb, s.linvel_w);
   for (int k = 0; k < 3; ++k) lin_vel_b_[3 * i + k] = vb[k];
+  for (int k = 0; k < 3; ++k) lin_vel_w_[3 * i + k] = s.linvel_w[k];
   for (int k = 0; k < 3; ++k) ang_vel_b_[3 * i + k] = s.angvel_b[k];
 }
 

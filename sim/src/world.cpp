@@ -787,6 +787,7 @@ void World::run_slice(int worker) {
     int env = batch_ ? env_steps_batched(begin, end) : begin;
     for (; env < end; ++env) env_step(env);
   }
+  if (after_step_ != nullptr) after_step_(after_step_context_, begin, end);
 }
 
 void World::step(int num_env_steps) {

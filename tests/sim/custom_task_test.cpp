@@ -11,6 +11,7 @@
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
+#include "task_world.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -34,19 +35,17 @@ std::unique_ptr<Task> build(const WorldConfig& c) {
   return t;
 }
 
+// Puts env's robot at p, level and at rest, through the Simulator (its views follow).
 void place(Task& t, int env, const Vec3& p) {
-  RigidBodyState& st = t.world().robot_state(env, 0);
-  st.position_w = p;
-  st.orientation_wb = Quat::Identity();
-  st.linvel_w.setZero();
-  st.angvel_b.setZero();
+  const real pos[3] = {p[0], p[1], p[2]}, q[4] = {0, 0, 0, 1}, v[3] = {0, 0, 0}, w[3] = {0, 0, 0};
+  ASSERT_TRUE(t.simulator().reset_root_states(&env, 1, pos, q, v, w)) << t.simulator().last_error();
 }
 
 // The wall halves as obstacles of the world (semantic ids 21 / 22).
 bool wall_obstacle(const Task& t, int env, int semantic, Obstacle& out) {
-  for (int i = 0; i < t.world().num_obstacles(env); ++i)
-    if (t.world().obstacle(env, i).semantic_id == semantic) {
-      out = t.world().obstacle(env, i);
+  for (int i = 0; i < world_of(t).num_obstacles(env); ++i)
+    if (world_of(t).obstacle(env, i).semantic_id == semantic) {
+      out = world_of(t).obstacle(env, i);
       return true;
     }
   return false;
@@ -100,8 +99,8 @@ TEST(CustomTask, TerminationsFireExactlyInsideTheBox) {
   EXPECT_EQ(t->terminations()[1], 0);
   EXPECT_GT(t->rewards()[0], 9.0f);
   EXPECT_EQ(t->infos().successes, 1u);
-  EXPECT_EQ(t->world().episode_step(0), 0);
-  const Vec3 p = t->world().robot_state(0, 0).position_w;
+  EXPECT_EQ(world_of(*t).episode_step(0), 0);
+  const Vec3 p = world_of(*t).robot_state(0, 0).position_w;
   EXPECT_LT(p[0], -2.0_r) << "new start in front of the wall";
   const Vec3 box_err = v.object_centre(0, "goal_box") - p;  // yaw-free start? compare the norm
   const float* o = t->observations();
@@ -196,7 +195,7 @@ TaskInfos run_policy(Task& t, int policy, int max_steps) {
     }
     if (policy == 2)
       for (int e = 0; e < n; ++e) {
-        Vec3 d = v.object_centre(e, "goal_box") + Vec3(0, 0, 0.1_r) - t.world().robot_state(e, 0).position_w;
+        Vec3 d = v.object_centre(e, "goal_box") + Vec3(0, 0, 0.1_r) - world_of(t).robot_state(e, 0).position_w;
         if (d.norm() > 1) d /= d.norm();
         for (int k = 0; k < 3; ++k) a[static_cast<std::size_t>(e) * 4 + k] = static_cast<float>(d[k]);
       }
@@ -237,7 +236,7 @@ TEST(CustomTask, ObservationAndRewardTerms) {
   // Hold still for a step (zero offset) and check the terms against the state after it.
   const float zero[4] = {0, 0, 0, 0};
   t->step(zero);
-  const RigidBodyState& st = t->world().robot_state(0, 0);
+  const RigidBodyState& st = world_of(*t).robot_state(0, 0);
   const float* o = t->observations();
   const Vec3 eg = v.object_centre(0, "gap") - st.position_w;
   const real yaw = std::atan2(2 * (st.orientation_wb.w() * st.orientation_wb.z()), 1 - 2 * st.orientation_wb.z() * st.orientation_wb.z());
@@ -259,14 +258,14 @@ TEST(CustomTask, ObservationAndRewardTerms) {
   const float a1[4] = {0.5f, 0, 0, 0};
   t->step(a1);  // previous distance is from the last step (the hand move counts as progress)
   const float a2[4] = {0.5f, 0, 0, 0};
-  const real d0 = (v.object_centre(0, "goal_box") - t->world().robot_state(0, 0).position_w).norm();
+  const real d0 = (v.object_centre(0, "goal_box") - world_of(*t).robot_state(0, 0).position_w).norm();
   t->step(a2);
-  const real d1 = (v.object_centre(0, "goal_box") - t->world().robot_state(0, 0).position_w).norm();
+  const real d1 = (v.object_centre(0, "goal_box") - world_of(*t).robot_state(0, 0).position_w).norm();
   EXPECT_NEAR(t->rewards()[0], static_cast<float>(d0 - d1), 1e-5f);  // same action: no action-rate term
   EXPECT_GT(d0 - d1, 0.0_r);
   const float a3[4] = {0.5f, 0.3f, 0, 0};  // action change 0.3: -0.01 * 0.09
   t->step(a3);
-  const real d2 = (v.object_centre(0, "goal_box") - t->world().robot_state(0, 0).position_w).norm();
+  const real d2 = (v.object_centre(0, "goal_box") - world_of(*t).robot_state(0, 0).position_w).norm();
   EXPECT_NEAR(t->rewards()[0], static_cast<float>(d1 - d2) - 0.0009f, 1e-5f);
 }
 
@@ -341,6 +340,6 @@ TEST(CustomTask, SameResultForAnyThreadCount) {
   }
   EXPECT_GT(t1->infos().successes, 0u);
   EXPECT_EQ(t1->infos().successes, t3->infos().successes);
-  EXPECT_EQ(t1->world().state_hash(), t3->world().state_hash());
+  EXPECT_EQ(world_of(*t1).state_hash(), world_of(*t3).state_hash());
   for (int i = 0; i < 6 * t1->obs_dim(); ++i) ASSERT_EQ(t1->observations()[i], t3->observations()[i]) << i;
 }

@@ -11,6 +11,7 @@
 #include "kestrel/sim/navigation_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
+#include "task_world.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -99,8 +100,8 @@ TEST(NavigationTask, ShapesAndFirstObservation) {
   EXPECT_EQ(t->action_dim(), 4);
   for (int e = 0; e < 4; ++e) {
     const float* o = t->observations() + e * t->obs_dim();
-    const RigidBodyState& st = t->world().robot_state(e, 0);
-    const real d = (t->world().target(e, 0) - st.position_w).norm();
+    const RigidBodyState& st = world_of(*t).robot_state(e, 0);
+    const real d = (world_of(*t).target(e, 0) - st.position_w).norm();
     EXPECT_NEAR(o[3], static_cast<float>(d), 1e-4f);
     EXPECT_NEAR(std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]), 1.0f, 1e-5f);
     EXPECT_GT(d, 5.0_r);  // goal ratio x 0.90..0.94, start 0.1..0.2 of 10 m
@@ -108,8 +109,8 @@ TEST(NavigationTask, ShapesAndFirstObservation) {
     for (int k = 17; k < t->obs_dim(); ++k) EXPECT_TRUE(o[k] >= 0.0f && o[k] <= 1.0f);
     // Goal inside the bounds' ratio box.
     Vec3 lo, hi;
-    t->world().lower_upper_bounds(e, lo, hi);
-    const Vec3 r = (t->world().target(e, 0) - lo).cwiseQuotient(hi - lo);
+    world_of(*t).lower_upper_bounds(e, lo, hi);
+    const Vec3 r = (world_of(*t).target(e, 0) - lo).cwiseQuotient(hi - lo);
     EXPECT_TRUE(r[0] >= 0.9_r - 1e-5_r && r[0] <= 0.94_r + 1e-5_r) << r.transpose();
     EXPECT_TRUE(r[1] >= 0.1_r - 1e-5_r && r[1] <= 0.9_r + 1e-5_r);
   }
@@ -120,27 +121,27 @@ TEST(NavigationTask, ImageSeesTheGroundWhenPitchedDown) {
   // the ground at ~1 m (0.25 of its 4 m range); level at 4.5 m it sees nothing (1.0).
   auto t = build(nav_config(1, 5));
   ASSERT_TRUE(t);
-  RigidBodyState& st = t->world().robot_state(0, 0);
+  RigidBodyState& st = world_of(*t).robot_state(0, 0);
   st.position_w = Vec3(0, 0, 1);
   st.orientation_wb = quat_from_euler_xyz(0, 80 * kPi / 180, 0);
-  t->world().render_sensors(0);
+  world_of(*t).render_sensors(0);
   std::vector<float> pool(64);
-  min_pool_ranges(t->world().sensor_ranges(0, 0), t->world().sensor_height(0), t->world().sensor_width(0), 4, 8, 8, pool.data());
+  min_pool_ranges(world_of(*t).sensor_ranges(0, 0), world_of(*t).sensor_height(0), world_of(*t).sensor_width(0), 4, 8, 8, pool.data());
   float mn = 1;
   for (float v : pool) mn = std::min(mn, v);
   EXPECT_NEAR(mn, 0.25f, 0.05f);
   st.orientation_wb = Quat::Identity();
   st.position_w = Vec3(0, 0, 4.5_r);  // level, high: the 45 deg lower edge meets the floor 6.4 m away
-  t->world().render_sensors(0);
-  min_pool_ranges(t->world().sensor_ranges(0, 0), t->world().sensor_height(0), t->world().sensor_width(0), 4, 8, 8, pool.data());
+  world_of(*t).render_sensors(0);
+  min_pool_ranges(world_of(*t).sensor_ranges(0, 0), world_of(*t).sensor_height(0), world_of(*t).sensor_width(0), 4, 8, 8, pool.data());
   for (float v : pool) EXPECT_EQ(v, 1.0f);
 }
 
 TEST(NavigationTask, SuccessTerminatesAndAutoResets) {
   auto t = build(nav_config(2, 7));
   ASSERT_TRUE(t);
-  const Vec3 goal = t->world().target(0, 0);
-  RigidBodyState& st = t->world().robot_state(0, 0);
+  const Vec3 goal = world_of(*t).target(0, 0);
+  RigidBodyState& st = world_of(*t).robot_state(0, 0);
   st.position_w = goal + Vec3(0.3_r, 0, 0);  // inside the 1 m success radius
   const std::vector<float> zero(2 * 4, 0.0f);
   t->step(zero.data());
@@ -153,8 +154,8 @@ TEST(NavigationTask, SuccessTerminatesAndAutoResets) {
   EXPECT_DOUBLE_EQ(t->infos().success_rate(), 1.0);
   EXPECT_GT(t->rewards()[0], 5.0f);  // the proximity terms, not a penalty
   // The returned row is the new episode's first observation.
-  EXPECT_EQ(t->world().episode_step(0), 0);
-  const real d_new = (t->world().target(0, 0) - t->world().robot_state(0, 0).position_w).norm();
+  EXPECT_EQ(world_of(*t).episode_step(0), 0);
+  const real d_new = (world_of(*t).target(0, 0) - world_of(*t).robot_state(0, 0).position_w).norm();
   EXPECT_NEAR(dist_obs(*t, 0), static_cast<float>(d_new), 1e-4f);
   EXPECT_GT(d_new, 5.0_r);
 }
@@ -162,7 +163,7 @@ TEST(NavigationTask, SuccessTerminatesAndAutoResets) {
 TEST(NavigationTask, CrashGivesCollisionPenalty) {
   auto t = build(nav_config(2, 8));
   ASSERT_TRUE(t);
-  t->world().robot_state(1, 0).position_w[2] = 0.05_r;  // into the ground plane
+  world_of(*t).robot_state(1, 0).position_w[2] = 0.05_r;  // into the ground plane
   const std::vector<float> zero(2 * 4, 0.0f);
   t->step(zero.data());
   EXPECT_EQ(t->terminations()[1], 1);
@@ -170,8 +171,8 @@ TEST(NavigationTask, CrashGivesCollisionPenalty) {
   EXPECT_EQ(t->terminations()[0], 0);
   EXPECT_EQ(t->infos().crashes, 1u);
   EXPECT_EQ(t->infos().successes, 0u);
-  EXPECT_EQ(t->world().episode_step(1), 0);
-  EXPECT_EQ(t->world().episode_step(0), 1);
+  EXPECT_EQ(world_of(*t).episode_step(1), 0);
+  EXPECT_EQ(world_of(*t).episode_step(0), 1);
 }
 
 TEST(NavigationTask, TruncationAtEpisodeLength) {
@@ -196,7 +197,7 @@ TEST(NavigationTask, ActionsAreScaledVelocityCommands) {
   ASSERT_TRUE(t);
   const float a[4] = {3.0f, -0.25f, 0.5f, 0.5f};  // x clamped to 1
   t->step(a);
-  const real* w = t->world().action(0, 0);
+  const real* w = world_of(*t).action(0, 0);
   EXPECT_FLOAT_EQ(static_cast<float>(w[0]), 2.0f);
   EXPECT_FLOAT_EQ(static_cast<float>(w[1]), -0.5f);
   EXPECT_FLOAT_EQ(static_cast<float>(w[2]), 1.0f);
@@ -206,7 +207,7 @@ TEST(NavigationTask, ActionsAreScaledVelocityCommands) {
   EXPECT_FLOAT_EQ(o[14], -0.5f);
   const float bad[4] = {std::nanf(""), 0, 0, 0};
   t->step(bad);
-  EXPECT_EQ(t->world().action(0, 0)[0], 0_r);
+  EXPECT_EQ(world_of(*t).action(0, 0)[0], 0_r);
 }
 
 TEST(NavigationTask, CurriculumFollowsSuccessRate) {
@@ -219,12 +220,12 @@ TEST(NavigationTask, CurriculumFollowsSuccessRate) {
     p.curriculum.check_after_episodes = 6;
     auto t = build(c, p);
     ASSERT_TRUE(t);
-    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.5f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.5f);
     const std::vector<float> zero(6 * 4, 0.0f);
     for (int s = 0; s < 30; ++s) t->step(zero.data());
     EXPECT_EQ(t->infos().curriculum_level, 2);  // three windows
     EXPECT_EQ(t->infos().curriculum_changes, 3u);
-    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.2f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.2f);
   }
   // The scripted policy in the empty env succeeds: the level rises by 2 per window.
   {
@@ -242,7 +243,7 @@ TEST(NavigationTask, CurriculumFollowsSuccessRate) {
     }
     EXPECT_EQ(t->infos().successes, 8u);
     EXPECT_EQ(t->infos().curriculum_level, 2);
-    EXPECT_FLOAT_EQ(static_cast<float>(t->world().config().env.curriculum_level), 0.2f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.2f);
   }
 }
 
@@ -296,7 +297,7 @@ TEST(NavigationTask, SameResultForAnyThreadCount) {
     t1->step(a.data());
     t3->step(a.data());
   }
-  EXPECT_EQ(t1->world().state_hash(), t3->world().state_hash());
+  EXPECT_EQ(world_of(*t1).state_hash(), world_of(*t3).state_hash());
   for (int i = 0; i < 6 * t1->obs_dim(); ++i) ASSERT_EQ(t1->observations()[i], t3->observations()[i]) << i;
   EXPECT_EQ(t1->infos().episodes, t3->infos().episodes);
 }

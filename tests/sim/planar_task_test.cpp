@@ -1,4 +1,4 @@
-// Tasks on the planar backend (sim/src/tasks/planar_tasks.cpp): navigation_task on the fixed-altitude
+// Tasks on the planar backend (the tasks of sim/src/tasks/, written once over the Simulator): navigation_task on the fixed-altitude
 // multirotor (observation layout with the pooled 2-D lidar, dropped vertical action, success /
 // crash / truncation with auto-reset, curriculum, scripted policy beating zero actions, no heap in
 // step, thread-count independence), position_setpoint_task on planar, the errors for tasks that do
@@ -11,11 +11,13 @@
 #include <vector>
 
 #include "heap_counter.hpp"
+#include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
+#include "task_world.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -44,7 +46,7 @@ std::unique_ptr<Task> build(const WorldConfig& c) {
 
 // Puts env's robot at (x, y) at the flight altitude, yaw 0, at rest.
 void place(Task& t, int env, real x, real y, real vx = 0) {
-  Simulator* s = t.simulator();
+  Simulator* s = &t.simulator();
   const real pos[3] = {x, y, s->config().simulator.altitude_m}, q[4] = {0, 0, 0, 1}, v[3] = {vx, 0, 0}, w[3] = {0, 0, 0};
   ASSERT_TRUE(s->reset_root_states(&env, 1, pos, q, v, w)) << s->last_error();
 }
@@ -58,11 +60,10 @@ TEST(PlanarNavigationTask, ShapesAndFirstObservation) {
   ASSERT_TRUE(t);
   EXPECT_STREQ(t->name(), "navigation_task");
   EXPECT_STREQ(t->backend_name(), "planar");
-  EXPECT_FALSE(t->has_world());
-  ASSERT_NE(t->simulator(), nullptr);
+  EXPECT_EQ(rigid_world(t->simulator()), nullptr);
   EXPECT_EQ(t->obs_dim(), 81);  // 17 + 8 x 8, as on rigid
   EXPECT_EQ(t->action_dim(), 4);
-  const Simulator& s = *t->simulator();
+  const Simulator& s = t->simulator();
   ASSERT_EQ(s.lidar_beams(), 128);
   const real range = s.config().simulator.lidar_max_range_m;
   for (int e = 0; e < 3; ++e) {
@@ -98,14 +99,14 @@ TEST(PlanarNavigationTask, VerticalActionDroppedOthersScaled) {
   EXPECT_FLOAT_EQ(o[14], -0.5f);
   EXPECT_FLOAT_EQ(o[15], 0.0f);
   EXPECT_FLOAT_EQ(o[16], 0.5f * 1.0471976f);
-  const Simulator& s = *t->simulator();
+  const Simulator& s = t->simulator();
   EXPECT_FLOAT_EQ(static_cast<float>(s.base_pos_w()[2]), static_cast<float>(s.config().simulator.altitude_m));
 }
 
 TEST(PlanarNavigationTask, SuccessCrashAndAutoReset) {
   auto t = build(planar_nav(3, 3));
   ASSERT_TRUE(t);
-  const Simulator& s = *t->simulator();
+  const Simulator& s = t->simulator();
   // env 0 inside the success radius; env 1 far outside the bounds (an exit counts as a crash).
   place(*t, 0, s.target_w()[0] + 0.3_r, s.target_w()[1]);
   place(*t, 1, 40, 40);
@@ -152,17 +153,17 @@ TEST(PlanarNavigationTask, CurriculumFollowsSuccessRate) {
   WorldConfig c = planar_nav(4, 5);
   NavigationParams p;
   p.curriculum.check_after_episodes = 4;
-  auto t = make_planar_navigation_task(c, p, err);
+  auto t = make_navigation_task(c, p, Backend::planar, err);
   ASSERT_TRUE(t) << err;
   const std::vector<float> zero(4 * 4, 0.0f);
   for (int round = 0; round < 2; ++round) {
-    for (int e = 0; e < 4; ++e) place(*t, e, t->simulator()->target_w()[3 * e], t->simulator()->target_w()[3 * e + 1]);
+    for (int e = 0; e < 4; ++e) place(*t, e, t->simulator().target_w()[3 * e], t->simulator().target_w()[3 * e + 1]);
     t->step(zero.data());
   }
   EXPECT_EQ(t->infos().successes, 8u);
   EXPECT_EQ(t->infos().curriculum_level, 4);
   EXPECT_EQ(t->infos().curriculum_changes, 2u);
-  EXPECT_FLOAT_EQ(static_cast<float>(t->simulator()->config().env.curriculum_level), 0.4f);
+  EXPECT_FLOAT_EQ(static_cast<float>(t->simulator().config().env.curriculum_level), 0.4f);
 }
 
 TEST(PlanarNavigationTask, ScriptedBeatsZero) {
@@ -206,7 +207,7 @@ TEST(PlanarNavigationTask, NoHeapInsideStep) {
     t->step(a.data());
   }
   EXPECT_EQ(counter.allocations(), 0u);
-  EXPECT_EQ(t->simulator()->step_heap_fallbacks(), 0u);
+  EXPECT_EQ(t->simulator().step_heap_fallbacks(), 0u);
   EXPECT_GE(t->infos().episodes - episodes, 16u);
 }
 
@@ -303,7 +304,7 @@ TEST(PlanarTasks, RigidBackendIsTheWorldPath) {
   auto a = make_task(c, err);
   auto b = make_task(c, Backend::rigid, err);
   ASSERT_TRUE(a && b) << err;
-  EXPECT_TRUE(b->has_world());
+  EXPECT_NE(rigid_world(b->simulator()), nullptr);
   EXPECT_STREQ(b->backend_name(), "rigid");
   std::vector<float> act(3 * 4);
   for (int k = 0; k < 50; ++k) {
@@ -312,7 +313,7 @@ TEST(PlanarTasks, RigidBackendIsTheWorldPath) {
     b->step(act.data());
   }
   EXPECT_EQ(a->state_hash(), b->state_hash());
-  EXPECT_EQ(a->state_hash(), a->world().state_hash());
+  EXPECT_EQ(a->state_hash(), world_of(*a).state_hash());
 }
 
 TEST(PlanarTasks, SimulatorAutoResetOffFlagsButKeepsTheState) {
@@ -372,7 +373,7 @@ std::uint64_t fly_along_x(Task& t, real x0, real y, real x_stop) {
   const std::uint64_t crashes = t.infos().crashes, episodes = t.infos().episodes;
   for (int k = 0; k < 400; ++k) {
     t.step(a.data());
-    if (t.infos().episodes != episodes || t.simulator()->base_pos_w()[0] > x_stop) break;
+    if (t.infos().episodes != episodes || t.simulator().base_pos_w()[0] > x_stop) break;
   }
   return t.infos().crashes - crashes;
 }
@@ -420,7 +421,7 @@ TEST(PlanarGoalBox, WallIsSolidAndTheGapOpen) {
   // Through the gap: no crash up to 0.8 m behind the wall.
   Vec3 gap = v->object_centre(0, "gap");
   EXPECT_EQ(fly_along_x(*t, -1.0_r, gap[1], 0.8_r), 0u);
-  EXPECT_GT(t->simulator()->base_pos_w()[0], 0.8_r);
+  EXPECT_GT(t->simulator().base_pos_w()[0], 0.8_r);
   // At a wall segment 1.8 m beside the gap's centre (at least 1.2 m from its edge): a crash.
   const int env = 0;
   t->reset_idx(&env, 1);
@@ -479,7 +480,7 @@ TEST(PlanarGoalBox, NoHeapInsideStep) {
     t->step(a.data());
   }
   EXPECT_EQ(counter.allocations(), 0u);
-  EXPECT_EQ(t->simulator()->step_heap_fallbacks(), 0u);
+  EXPECT_EQ(t->simulator().step_heap_fallbacks(), 0u);
   EXPECT_GE(t->infos().episodes - episodes, 8u);
 }
 
@@ -501,21 +502,47 @@ TEST(PlanarGoalBox, SameResultForAnyThreadCount) {
   EXPECT_GT(t1->infos().successes, 0u);
 }
 
+ObstacleBox box(int asset_class, real half_extent_m) {
+  ObstacleBox b;
+  b.asset_class = asset_class;
+  b.half_extents_m = Vec3::Constant(half_extent_m);
+  return b;
+}
+
 TEST(PlanarGoalBox, SetObstacleBoxRefusals) {
   auto t = build(planar_goal_box(1, 27));
   ASSERT_TRUE(t);
-  Simulator* s = t->simulator();
-  EXPECT_FALSE(s->set_obstacle_box(1, 0, 0, 0, 1, 1, 0));
+  Simulator* s = &t->simulator();
+  EXPECT_FALSE(s->set_obstacle_box(1, box(0, 1)));
   EXPECT_NE(s->last_error().find("env 1 out of range"), std::string::npos) << s->last_error();
-  EXPECT_FALSE(s->set_obstacle_box(0, 0, 0, 0, -1, 1, 0));
+  EXPECT_FALSE(s->set_obstacle_box(0, box(0, -1)));
   EXPECT_NE(s->last_error().find("positive finite half extents"), std::string::npos) << s->last_error();
-  EXPECT_FALSE(s->set_obstacle_box(0, 99, 0, 0, 1, 1, 0));
+  EXPECT_FALSE(s->set_obstacle_box(0, box(99, 1)));
   EXPECT_NE(s->last_error().find("no obstacle slot"), std::string::npos) << s->last_error();
   std::string err;
   WorldConfig c = planar_goal_box(1, 27);
   c.simulator.lidar_beams = 0;
-  auto rigid = make_simulator(c, Backend::rigid, err);
-  ASSERT_TRUE(rigid) << err;
-  EXPECT_FALSE(rigid->set_obstacle_box(0, 0, 0, 0, 1, 1, 0));
+  auto rigid_task = make_task(c, Backend::rigid, err);  // reserves the objects' box classes
+  ASSERT_TRUE(rigid_task) << err;
+  Simulator* rigid = &rigid_task->simulator();
+  EXPECT_FALSE(rigid->set_obstacle_box(0, box(99, 1)));
   EXPECT_NE(rigid->last_error().find("simulator rigid"), std::string::npos) << rigid->last_error();
+  EXPECT_NE(rigid->last_error().find("no obstacle slot"), std::string::npos) << rigid->last_error();
+  // On rigid the box is 3-D: the class's first slot gets the centre, the half extents and the yaw.
+  World* w = rigid_world(*rigid);
+  ASSERT_NE(w, nullptr);
+  ASSERT_GT(w->num_obstacles(0), 0);
+  const int cls = w->obstacle(0, 0).class_index;
+  ObstacleBox b = box(cls, 0.25_r);
+  b.center_w = Vec3(1, 2, 1.5_r);
+  b.yaw_rad = 0.5_r;
+  ASSERT_TRUE(rigid->set_obstacle_box(0, b)) << rigid->last_error();
+  int moved = 0;
+  for (int i = 0; i < w->num_obstacles(0); ++i) {
+    const Obstacle& o = w->obstacle(0, i);
+    if (o.class_index == cls && o.shape.type == ShapeType::box && o.shape.position_w == b.center_w &&
+        o.shape.half_extents_m == b.half_extents_m && std::fabs(euler_xyz(o.shape.orientation_wb)[2] - 0.5_r) < 1e-5_r)
+      ++moved;
+  }
+  EXPECT_EQ(moved, 1);
 }

@@ -13,6 +13,7 @@
 #include "json_pull.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/task.hpp"
+#include "task_world.hpp"
 #include "test_io.hpp"
 
 using namespace kestrel;
@@ -160,8 +161,8 @@ TEST(SimTask, ShapesAndFirstObservation) {
   EXPECT_EQ(t->action_dim(), 4);
   for (int e = 0; e < 8; ++e) {
     const float* o = t->observations() + e * 13;
-    const RigidBodyState& st = t->world().robot_state(e, 0);
-    const Vec3 err = t->world().target(e, 0) - st.position_w;
+    const RigidBodyState& st = world_of(*t).robot_state(e, 0);
+    const Vec3 err = world_of(*t).target(e, 0) - st.position_w;
     for (int k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(o[k], static_cast<float>(err[k]));
     EXPECT_FLOAT_EQ(o[6], static_cast<float>(st.orientation_wb.w()));  // xyzw: w last
     EXPECT_GT(err.norm(), 0.5_r);  // the start is not the target
@@ -198,7 +199,7 @@ TEST(SimTask, TruncationAutoResetAndReset) {
   }
   // Auto-reset: the returned observation is the new episode's first (a new start, episode step 0).
   for (int e = 0; e < 4; ++e) {
-    EXPECT_EQ(t->world().episode_step(e), 0);
+    EXPECT_EQ(world_of(*t).episode_step(e), 0);
     EXPECT_NE(t->observations()[e * 13], before[static_cast<std::size_t>(e) * 13]);
   }
   EXPECT_EQ(t->infos().episodes, 4u);
@@ -206,10 +207,10 @@ TEST(SimTask, TruncationAutoResetAndReset) {
   t->step(a.data());
   const int ids[1] = {2};
   t->reset_idx(ids, 1);
-  EXPECT_EQ(t->world().episode_step(2), 0);
-  EXPECT_EQ(t->world().episode_step(1), 1);
+  EXPECT_EQ(world_of(*t).episode_step(2), 0);
+  EXPECT_EQ(world_of(*t).episode_step(1), 1);
   t->reset();
-  for (int e = 0; e < 4; ++e) EXPECT_EQ(t->world().episode_step(e), 0);
+  for (int e = 0; e < 4; ++e) EXPECT_EQ(world_of(*t).episode_step(e), 0);
 }
 
 TEST(SimTask, FarFromTargetTerminatesWithMinus20) {
@@ -268,14 +269,14 @@ TEST(SimTask, RewardFallsUnderZeroMotorCommands) {
   auto t = build(with_controller(task_config(32, 11), "direct_motor_control"));
   ASSERT_TRUE(t);
   std::vector<double> z0(32);
-  for (int e = 0; e < 32; ++e) z0[static_cast<std::size_t>(e)] = static_cast<double>(t->world().robot_state(e, 0).position_w[2]);
+  for (int e = 0; e < 32; ++e) z0[static_cast<std::size_t>(e)] = static_cast<double>(world_of(*t).robot_state(e, 0).position_w[2]);
   std::vector<float> scripted(32 * 4);
   EXPECT_FALSE(t->scripted_actions(scripted.data())) << "no scripted controller for motor commands";
   const std::vector<double> r = reward_curve(*t, false, 20);
   // 0.2 s of free fall from rest: every robot has dropped ~0.196 m (none has reached the floor:
   // starts are >= 0.5 m up, contact at 0.2 m).
   for (int e = 0; e < 32; ++e)
-    EXPECT_LT(static_cast<double>(t->world().robot_state(e, 0).position_w[2]), z0[static_cast<std::size_t>(e)] - 0.15) << e;
+    EXPECT_LT(static_cast<double>(world_of(*t).robot_state(e, 0).position_w[2]), z0[static_cast<std::size_t>(e)] - 0.15) << e;
   const std::vector<double> rest = reward_curve(*t, false, 180);
   std::vector<double> all = r;
   all.insert(all.end(), rest.begin(), rest.end());

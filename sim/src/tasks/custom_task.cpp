@@ -8,7 +8,7 @@
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "custom_task_terms.hpp"
-#include "task_access.hpp"
+#include "task_support.hpp"
 
 namespace kestrel::sim {
 
@@ -278,7 +278,7 @@ void write_obs(const CustomTaskSpec& s, const Resolved& res, const Vec3* centres
     const ObservationTerm& t = s.observations[j];
     switch (t.kind) {
       case ObsTermKind::position_error_to: {
-        const Vec3 e = task_access::world_to_vehicle(in.orientation_wb, centres[res.obs_obj[j]] - in.position_w);
+        const Vec3 e = task_support::world_to_vehicle(in.orientation_wb, centres[res.obs_obj[j]] - in.position_w);
         for (int k = 0; k < 3; ++k) o[at + k] = static_cast<float>(e[k]);
         break;
       }
@@ -295,8 +295,7 @@ void write_obs(const CustomTaskSpec& s, const Resolved& res, const Vec3* centres
         for (int k = 0; k < kActionDim; ++k) o[at + k] = in.action[k];
         break;
       case ObsTermKind::image_pool:
-        if (in.height == 1) min_pool_ranges(in.ranges, 1, in.width, in.max_range_m, 1, t.rows * t.cols, o + at);
-        else min_pool_ranges(in.ranges, in.height, in.width, in.max_range_m, t.rows, t.cols, o + at);
+        task_support::pool_image(in.image, t.rows, t.cols, o + at);
         break;
     }
     at += obs_term_dim(t);
@@ -309,41 +308,43 @@ namespace {
 
 using custom_terms::kActionDim;
 
+// One class for every backend. Where the backend holds the altitude (planar multirotor) the
+// terms see the objects at the flight altitude (their z replaced by it: position errors have z
+// 0, distances are horizontal), inside_box checks x / y only (the robot cannot descend into the
+// box), the vertical command is dropped, and the bounds rule reads x and y; object_centre()
+// reports the drawn 3-D centres either way.
 class CustomTask final : public Task, public CustomTaskView {
  public:
-  CustomTask(std::unique_ptr<World> w, const CustomTaskSpec& spec, std::vector<int> slot_class, int sensor, int obs_dim)
-      : Task(std::move(w), obs_dim, kActionDim), spec_(spec), res_(spec_), slot_class_(std::move(slot_class)), sensor_(sensor) {
-    world_->set_auto_reset(false);
+  CustomTask(std::unique_ptr<Simulator> s, const CustomTaskSpec& spec, std::vector<int> slot_class)
+      : Task(std::move(s), custom_terms::obs_dim(spec), kActionDim), spec_(spec), res_(spec_), slot_class_(std::move(slot_class)) {
     const std::size_t n = static_cast<std::size_t>(num_envs_), no = spec_.objects.size();
     centres_.assign(n * no, Vec3::Zero());
+    seen_.assign(n * no, Vec3::Zero());
     prev_dist_.assign(n * spec_.rewards.size(), 0.0f);
     action_.assign(n * kActionDim, 0.0f);
     action_prev_.assign(n * kActionDim, 0.0f);
-    episode_reward_.assign(n, 0.0);
+    boxes_.reserve(no);
     rng_.resize(n);
-    for (std::size_t e = 0; e < n; ++e) rng_[e] = RngStream(world_->config().seed, static_cast<std::uint32_t>(e), kPurposeTaskRandomise);
-    if (sensor_ >= 0) {
-      const SensorConfig& sc = world_->sensor_config(sensor_);
-      const sensors::RangeOutputParams& rp = sc.kind == SensorKind::camera ? sc.camera.range : sc.lidar.range;
-      max_range_m_ = rp.normalize_range ? 1 : rp.max_range;
-    }
-    kind_ = world_->config().controller.kind;
-    len_ = world_->config().task.episode_len_env_steps;
+    for (std::size_t e = 0; e < n; ++e) rng_[e] = RngStream(sim_->config().seed, static_cast<std::uint32_t>(e), kPurposeTaskRandomise);
+    kind_ = sim_->config().controller.kind;
+    flat_ = sim_->holds_altitude();
     reset();
   }
 
   const char* name() const override { return spec_.id.c_str(); }
 
   void step(const float* actions) override {
+    const int ad = sim_->action_dim();
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
       float* cur = &action_[i * kActionDim];
       float* prev = &action_prev_[i * kActionDim];
       for (int k = 0; k < kActionDim; ++k) prev[k] = cur[k];
       custom_terms::clip_action(spec_, kind_, actions + i * kActionDim, cur);
-      real a[kActionDim];
-      if (kind_ == ControllerKind::lee_position) {
-        const Vec3& p = task_access::robot(*world_, env).position_w;
+      if (flat_) cur[2] = 0.0f;  // the altitude is held: no vertical command (nor its action-rate penalty)
+      real* a = &sim_actions_[i * static_cast<std::size_t>(ad)];
+      if (kind_ == ControllerKind::lee_position) {  // offsets from the current position
+        const Vec3 p = position(env);
         for (int k = 0; k < 3; ++k) a[k] = p[k] + static_cast<real>(cur[k]);
         a[3] = static_cast<real>(cur[3]);
       } else if (kind_ == ControllerKind::lee_velocity) {
@@ -352,35 +353,35 @@ class CustomTask final : public Task, public CustomTaskView {
       } else {
         for (int k = 0; k < kActionDim; ++k) a[k] = static_cast<real>(cur[k]);
       }
-      task_access::set_action(*world_, env, a, kActionDim);
+      if (flat_) a[2] = kind_ == ControllerKind::lee_position ? sim_->altitude_m() : 0;
     }
-    world_->step(1);
+    sim_->step(sim_actions_.data());
     ++infos_.steps;
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
+      ++episode_step_[i];
       const int why = evaluate_terminations(env);
       const bool success = why == 1, crash = why == 2, timeout = why == 3;
-      const Vec3 p = task_access::robot(*world_, env).position_w;
-      const float r = custom_terms::reward(spec_, res_, env_centres(env), p, success, crash, &action_[i * kActionDim],
+      const float r = custom_terms::reward(spec_, res_, seen(env), position(env), success, crash, &action_[i * kActionDim],
                                            &action_prev_[i * kActionDim], &prev_dist_[i * spec_.rewards.size()]);
       rewards_[i] = r;
       terminations_[i] = (success || crash) ? 1 : 0;
       truncations_[i] = timeout ? 1 : 0;
       episode_reward_[i] += static_cast<double>(r);
-      if (why != 0) {
-        custom_terms::count_episode(why, episode_reward_[i], infos_);
-        keep_final_obs(env);
-        reset_env_and_objects(env);  // auto-reset: the row below is the new episode's first observation
-      }
-      write_obs(env);
+      ended_[i] = why != 0 ? 1 : 0;
+      if (ended_[i]) custom_terms::count_episode(why, episode_reward_[i], infos_);
     }
+    reset_ended();  // auto-reset: the rows below are the new episodes' first observations
+    for (int env = 0; env < num_envs_; ++env) write_obs(env);
   }
 
   bool scripted_actions(float* actions) const override {
     if (!spec_.scripted) return false;
-    for (int env = 0; env < num_envs_; ++env)
-      spec_.scripted(spec_, task_access::robot(*world_, env).position_w, env_centres(env),
-                     actions + static_cast<std::size_t>(env) * kActionDim);
+    for (int env = 0; env < num_envs_; ++env) {
+      float* a = actions + static_cast<std::size_t>(env) * kActionDim;
+      spec_.scripted(spec_, position(env), seen(env), a);
+      if (flat_) a[2] = 0.0f;
+    }
     return true;
   }
 
@@ -389,80 +390,62 @@ class CustomTask final : public Task, public CustomTaskView {
   }
 
   int evaluate_terminations(int env) const override {
-    const bool crash = task_access::contact_crash(*world_, env) || task_access::out_of_bounds(*world_, env);
-    const bool timeout = world_->episode_step(env) >= len_;
-    return custom_terms::evaluate_terminations(spec_, res_, env_centres(env), task_access::robot(*world_, env).position_w, true,
-                                               crash, timeout);
+    return custom_terms::evaluate_terminations(spec_, res_, seen(env), position(env), !flat_, crash_or_out(env),
+                                               episode_step_[static_cast<std::size_t>(env)] >= len_);
   }
 
  private:
-  const Vec3* env_centres(int env) const {
-    return spec_.objects.empty() ? nullptr : &centres_[static_cast<std::size_t>(env) * spec_.objects.size()];
+  /// The objects' centres as the terms see them (at the flight altitude where it is held).
+  const Vec3* seen(int env) const {
+    return spec_.objects.empty() ? nullptr : &seen_[static_cast<std::size_t>(env) * spec_.objects.size()];
   }
 
-  // World reset (layout, start), then the randomisation terms move the named objects and the
-  // solid ones are written into their obstacle slots.
-  void reset_env_and_objects(int env) {
-    world_->reset_env(env);
+  // After the Simulator's reset of env: the randomisation terms move the objects and the solid
+  // ones are written into their box slots (one set_obstacle_boxes call: the images re-render once).
+  void on_reset(int env) override {
     const std::size_t i = static_cast<std::size_t>(env), no = spec_.objects.size();
     Vec3* c = no ? &centres_[i * no] : nullptr;
     custom_terms::randomize_objects(spec_, res_, rng_[i], c);
-    bool any = false;
-    for (int s = 0; s < world_->num_obstacles(env); ++s) {
-      Obstacle& o = world_->obstacle(env, s);
-      for (std::size_t k = 0; k < no; ++k) {
-        if (slot_class_[k] < 0 || o.class_index != slot_class_[k]) continue;
-        o.shape = Shape();
-        o.shape.type = ShapeType::box;
-        o.shape.half_extents_m = spec_.objects[k].half_extents_m;
-        o.shape.position_w = c[k];
-        any = true;
-      }
+    boxes_.clear();  // capacity reserved at creation: no heap
+    for (std::size_t k = 0; k < no; ++k) {
+      seen_[i * no + k] = flat_ ? Vec3(c[k][0], c[k][1], sim_->altitude_m()) : c[k];
+      if (slot_class_[k] < 0) continue;
+      ObstacleBox b;
+      b.asset_class = slot_class_[k];
+      b.center_w = c[k];
+      b.half_extents_m = spec_.objects[k].half_extents_m;
+      boxes_.push_back(b);
     }
-    if (any) world_->obstacles_changed(env);  // sweep order and sensor images see the moved objects
-    custom_terms::reset_progress(spec_, res_, c, task_access::robot(*world_, env).position_w, &prev_dist_[i * spec_.rewards.size()]);
+    // Checked at creation (positive finite extents, finite centres, one box slot per solid
+    // object), so this holds; a refusal would leave last_error() set and the objects where they were.
+    const bool ok = sim_->set_obstacle_boxes(env, boxes_.data(), static_cast<int>(boxes_.size()));
+    (void)ok;
+    custom_terms::reset_progress(spec_, res_, seen(env), position(env), &prev_dist_[i * spec_.rewards.size()]);
     for (int a = 0; a < kActionDim; ++a) action_[i * kActionDim + a] = action_prev_[i * kActionDim + a] = 0;
-    episode_reward_[i] = 0;
-  }
-
-  void reset_one(int env) override {
-    reset_env_and_objects(env);
-    const std::size_t i = static_cast<std::size_t>(env);
-    rewards_[i] = 0;
-    terminations_[i] = 0;
-    truncations_[i] = 0;
-    write_obs(env);
   }
 
   void write_obs(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
-    const task_access::RobotView r = task_access::robot(*world_, env);
     custom_terms::ObsInput in;
-    in.position_w = r.position_w;
-    in.orientation_wb = r.orientation_wb;
-    in.linvel_b = r.linvel_b;
-    in.angvel_b = r.angvel_b;
+    in.position_w = position(env);
+    const real* q = sim_->base_quat_xyzw() + 4 * i;
+    in.orientation_wb = Quat(q[3], q[0], q[1], q[2]);  // wxyz constructor
+    for (int k = 0; k < 3; ++k) in.linvel_b[k] = sim_->base_lin_vel_b()[3 * i + k];
+    for (int k = 0; k < 3; ++k) in.angvel_b[k] = sim_->base_ang_vel_b()[3 * i + k];
     in.action = &action_[i * kActionDim];
-    if (sensor_ >= 0) {
-      in.ranges = world_->sensor_ranges(env, sensor_);
-      in.height = world_->sensor_height(sensor_);
-      in.width = world_->sensor_width(sensor_);
-    }
-    in.max_range_m = max_range_m_;
-    custom_terms::write_obs(spec_, res_, env_centres(env), in, &obs_[i * static_cast<std::size_t>(obs_dim_)]);
+    if (sim_->num_range_images() > 0) in.image = sim_->range_image(env, 0);
+    custom_terms::write_obs(spec_, res_, seen(env), in, &obs_[i * static_cast<std::size_t>(obs_dim_)]);
   }
 
   CustomTaskSpec spec_;
   custom_terms::Resolved res_;
   std::vector<int> slot_class_;  // per object: its asset class index (solid), -1 (region)
-  int sensor_ = -1;
-  real max_range_m_ = 1;
   ControllerKind kind_ = ControllerKind::lee_position;
-  int len_ = 0;
-  std::vector<Vec3> centres_;        // envs x objects
-  std::vector<float> prev_dist_;     // envs x reward terms (progress_to)
+  bool flat_ = false;
+  std::vector<Vec3> centres_, seen_;  // envs x objects: drawn centres, and as the terms see them
+  std::vector<float> prev_dist_;      // envs x reward terms (progress_to)
   std::vector<float> action_, action_prev_;
-  std::vector<double> episode_reward_;
+  std::vector<ObstacleBox> boxes_;    // one reset's solid objects
   std::vector<RngStream> rng_;
 };
 
@@ -508,35 +491,35 @@ std::unique_ptr<Task> make_custom_task(const WorldConfig& config, std::string& e
     error = "unknown task '" + config.task.name + "'; registered task ids: " + rl_task_ids_joined();
     return nullptr;
   }
-  return make_custom_task(config, spec, error);
+  return make_custom_task(config, spec, Backend::rigid, error);
 }
 
-std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, std::string& error) {
+std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, Backend backend, std::string& error) {
   if (!custom_terms::check_spec(spec, error)) return nullptr;
-  const std::string where = "custom task '" + spec.id + "': ";
+  const bool planar = backend == Backend::planar;
+  const std::string where = planar ? "simulator planar: custom task " + spec.id + ": " : "custom task '" + spec.id + "': ";
   WorldConfig wc;
   std::vector<int> slot_class;
-  if (!custom_terms::prepare_config(config, spec, {ControllerKind::lee_position, ControllerKind::lee_velocity, ControllerKind::lee_attitude},
-                                    "lee_position_control, lee_velocity_control or lee_attitude_control", where, wc, slot_class, error))
-    return nullptr;
-  int sensor = -1, obs_dim = 0;
-  for (std::size_t s = 0; s < wc.robot.sensors.size() && sensor < 0; ++s)
-    if (wc.robot.sensors[s].kind != SensorKind::imu) sensor = static_cast<int>(s);
-  for (const ObservationTerm& t : spec.observations) {
-    if (t.kind == ObsTermKind::image_pool && sensor < 0) {
-      error = where + "the image_pool observation needs a ray sensor (lidar, ToF or camera) on the robot, e.g. `sensors: [vl53l5cx]`";
-      return nullptr;
-    }
-  }
-  obs_dim = custom_terms::obs_dim(spec);
-  std::unique_ptr<World> w = World::create(wc, error);
-  if (!w) return nullptr;
+  const std::vector<ControllerKind> allowed =
+      planar ? std::vector<ControllerKind>{ControllerKind::lee_position, ControllerKind::lee_velocity}
+             : std::vector<ControllerKind>{ControllerKind::lee_position, ControllerKind::lee_velocity, ControllerKind::lee_attitude};
+  const char* names = planar ? "lee_position_control or lee_velocity_control (the fixed-altitude multirotor), or use simulator: rigid"
+                             : "lee_position_control, lee_velocity_control or lee_attitude_control";
+  if (!custom_terms::prepare_config(config, spec, allowed, names, where, wc, slot_class, error)) return nullptr;
+  task_support::TaskNeeds needs;
+  needs.id = spec.id;
+  needs.prefix = where;
   for (const ObservationTerm& t : spec.observations)
-    if (t.kind == ObsTermKind::image_pool && (w->sensor_height(sensor) < t.rows || w->sensor_width(sensor) < t.cols)) {
-      error = where + "image_pool grid " + std::to_string(t.rows) + " x " + std::to_string(t.cols) + " is larger than the sensor image";
-      return nullptr;
+    if (t.kind == ObsTermKind::image_pool) {
+      needs.image = true;
+      if (t.rows * t.cols > needs.image_rows * needs.image_cols) {
+        needs.image_rows = t.rows;
+        needs.image_cols = t.cols;
+      }
     }
-  return std::unique_ptr<Task>(new CustomTask(std::move(w), spec, std::move(slot_class), sensor, obs_dim));
+  std::unique_ptr<Simulator> s = task_support::make_task_simulator(wc, backend, needs, error);
+  if (!s) return nullptr;
+  return std::unique_ptr<Task>(new CustomTask(std::move(s), spec, std::move(slot_class)));
 }
 
 const CustomTaskView* custom_task_view(const Task& task) { return dynamic_cast<const CustomTaskView*>(&task); }

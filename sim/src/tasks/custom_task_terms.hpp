@@ -1,5 +1,5 @@
-// The custom tasks' term evaluation, shared by the task on the 3-D World (custom_task.cpp) and the
-// one on the planar backend (planar_tasks.cpp): one formula per term, called by both.
+// The custom tasks' term evaluation (custom_task.cpp: one task class over the Simulator for every
+// backend): one formula per term.
 #pragma once
 
 #include <string>
@@ -59,9 +59,7 @@ struct ObsInput {
   Quat orientation_wb;
   Vec3 linvel_b, angvel_b;
   const float* action = nullptr;
-  const real* ranges = nullptr;  // image_pool: range image (height x width)
-  int height = 0, width = 0;
-  real max_range_m = 1;
+  RangeImage image;  // image_pool: the robot's range image 0 (ranges null: none)
 };
 /// Writes the observation terms in order. image_pool pools the range image into rows x cols
 /// cells, or into one row of rows * cols cells when the image is a single row (the planar lidar).

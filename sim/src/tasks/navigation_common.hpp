@@ -1,7 +1,6 @@
-// Pieces of navigation_task shared by its two implementations, the 3-D World one
-// (navigation_task.cpp) and the planar Simulator one (planar_tasks.cpp), so the action transform,
-// the state observations, the scripted policy and the episode / curriculum bookkeeping are one
-// code path (the reward is navigation_reward, navigation_task.hpp). Defined in navigation_task.cpp.
+// Pieces of navigation_task (navigation_task.cpp, one class over the Simulator for every
+// backend) kept as free functions so tests and other tasks can call them: the action transform,
+// the state observations, the scripted policy and the episode / curriculum bookkeeping (the reward is navigation_reward, navigation_task.hpp). Defined in navigation_task.cpp.
 #pragma once
 
 #include <cmath>

@@ -7,7 +7,7 @@
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "navigation_common.hpp"
-#include "task_access.hpp"
+#include "task_support.hpp"
 
 namespace kestrel::sim {
 
@@ -146,22 +146,34 @@ float EpisodeBook::progress(const NavigationCurriculum& c) const {
 
 namespace {
 
+// One class for every backend. The image part of the observations is the robot's first range
+// image pooled to pool_rows x pool_cols (rigid: the ray sensor's image; planar: the 2-D lidar,
+// one row, pooled into pool_rows * pool_cols sectors, so obs_dim is the same). Where the backend
+// holds the altitude (planar multirotor) the vertical velocity action is dropped (set to 0 before
+// the controller and in the actions the reward and observations see) and the bounds rule reads
+// x and y.
 class NavigationTask final : public Task {
  public:
-  NavigationTask(std::unique_ptr<World> w, const NavigationParams& p, int sensor)
-      : Task(std::move(w), navigation_obs_dim(p), kNavActionDim), p_(p), sensor_(sensor) {
-    world_->set_auto_reset(false);
+  NavigationTask(std::unique_ptr<Simulator> s, const NavigationParams& p)
+      : Task(std::move(s), navigation_obs_dim(p), kNavActionDim), p_(p) {
     const std::size_t n = static_cast<std::size_t>(num_envs_);
-    episode_reward_.assign(n, 0.0);
     err_prev_.assign(n * 3, 0.0f);
     action_.assign(n * kNavActionDim, 0.0f);
     action_prev_.assign(n * kNavActionDim, 0.0f);
-    ended_.assign(n, 0);
-    const SensorConfig& sc = world_->sensor_config(sensor_);
-    const sensors::RangeOutputParams& rp = sc.kind == SensorKind::camera ? sc.camera.range : sc.lidar.range;
-    max_range_m_ = rp.normalize_range ? 1 : rp.max_range;  // normalised images are already in [0, 1]
-    len_ = world_->config().task.episode_len_env_steps;
-    success_radius_m_ = static_cast<float>(world_->config().task.success_radius_m);
+    flat_ = sim_->holds_altitude();
+    const RangeImage img = sim_->range_image(0, 0);
+    scan_ = img.height == 1;
+    if (scan_) {
+      // A one-row scan: the scripted policy looks at the sectors within +-90 deg of the heading
+      // (all of them for a field of view up to 180 deg): its "ahead" is then the central +-45 deg,
+      // its sides the left and right quarter-circles, whatever the scan's field of view.
+      const int cells = p_.pool_rows * p_.pool_cols;
+      const real fov = img.horizontal_fov_rad;
+      const int margin = fov > kPi ? static_cast<int>(std::floor(static_cast<real>(cells) * (fov - kPi) / (2 * fov) + 0.5_r)) : 0;
+      view_begin_ = std::min(margin, (cells - 1) / 2);
+      view_end_ = cells - view_begin_;
+    }
+    success_radius_m_ = static_cast<float>(sim_->config().task.success_radius_m);
     book_.level = std::min(std::max(p_.curriculum.start_level, p_.curriculum.min_level), p_.curriculum.max_level);
     apply_level();
     reset();
@@ -170,29 +182,31 @@ class NavigationTask final : public Task {
   const char* name() const override { return "navigation_task"; }
 
   void step(const float* actions) override {
-    for (int env = 0; env < num_envs_; ++env) {
-      const float* in = actions + static_cast<std::size_t>(env) * kNavActionDim;
-      float* cur = &action_[static_cast<std::size_t>(env) * kNavActionDim];
-      float* prev = &action_prev_[static_cast<std::size_t>(env) * kNavActionDim];
-      real a[kNavActionDim];
-      for (int k = 0; k < kNavActionDim; ++k) prev[k] = cur[k];
-      nav::transform_action(in, p_, cur);
-      for (int k = 0; k < kNavActionDim; ++k) a[k] = static_cast<real>(cur[k]);
-      task_access::set_action(*world_, env, a, kNavActionDim);
-    }
-    world_->step(1);
-    ++infos_.steps;
-    const float progress = progress_fraction();
+    const int ad = sim_->action_dim();
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
+      float* cur = &action_[i * kNavActionDim];
+      float* prev = &action_prev_[i * kNavActionDim];
+      for (int k = 0; k < kNavActionDim; ++k) prev[k] = cur[k];
+      nav::transform_action(actions + i * kNavActionDim, p_, cur);
+      if (flat_) cur[2] = 0.0f;  // the altitude is held: no vertical command (nor its penalty)
+      for (int k = 0; k < kNavActionDim && k < ad; ++k)
+        sim_actions_[i * static_cast<std::size_t>(ad) + static_cast<std::size_t>(k)] = static_cast<real>(cur[k]);
+    }
+    sim_->step(sim_actions_.data());
+    ++infos_.steps;
+    const float progress = book_.progress(p_.curriculum);
+    for (int env = 0; env < num_envs_; ++env) {
+      const std::size_t i = static_cast<std::size_t>(env);
+      ++episode_step_[i];
       float e_v[3];
-      goal_error_vehicle(env, e_v);
-      const bool crash = task_access::contact_crash(*world_, env) || task_access::out_of_bounds(*world_, env);
+      error_vehicle(env, e_v);
+      const bool crash = crash_or_out(env);
       const float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
                                         &action_prev_[i * kNavActionDim], progress, p_.reward);
       for (int k = 0; k < 3; ++k) err_prev_[i * 3 + k] = e_v[k];
       const bool success = !crash && norm3(e_v) < success_radius_m_;
-      const bool trunc = !crash && !success && world_->episode_step(env) >= len_;
+      const bool trunc = !crash && !success && episode_step_[i] >= len_;
       rewards_[i] = r;
       terminations_[i] = (crash || success) ? 1 : 0;
       truncations_[i] = trunc ? 1 : 0;
@@ -203,137 +217,89 @@ class NavigationTask final : public Task {
     // Curriculum before the resets, as the reference updates it before post_reward_calculation_step:
     // the environments ending now get their next layout at the new level.
     if (book_.update_curriculum(p_.curriculum, infos_)) apply_level();
-    for (int env = 0; env < num_envs_; ++env) {
-      if (ended_[static_cast<std::size_t>(env)]) {
-        keep_final_obs(env);
-        world_->reset_env(env);  // auto-reset: the row below is the new episode's first observation
-        clear_memory(env);
-      }
-      write_obs(env);
-    }
+    reset_ended();  // auto-reset: the rows below are the new episodes' first observations
+    for (int env = 0; env < num_envs_; ++env) write_obs(env);
   }
 
-  // nav::scripted_action on every environment's observation row.
+  // nav::scripted_action on every environment's observation row (a scan: its forward sectors).
   bool scripted_actions(float* actions) const override {
-    for (int env = 0; env < num_envs_; ++env)
-    {
+    for (int env = 0; env < num_envs_; ++env) {
       const float* o = &obs_[static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_)];
-      nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, true,
-                           actions + static_cast<std::size_t>(env) * kNavActionDim);
+      float* a = actions + static_cast<std::size_t>(env) * kNavActionDim;
+      if (scan_) nav::scripted_action(o, o + kNavStateObs + view_begin_, 1, view_end_ - view_begin_, false, a);
+      else nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, !flat_, a);
+      if (flat_) a[2] = 0.0f;
     }
     return true;
   }
 
-  int curriculum_level() const { return book_.level; }
-
  private:
-  float progress_fraction() const { return book_.progress(p_.curriculum); }
-
   void apply_level() {
-    world_->set_curriculum_level(static_cast<real>(progress_fraction()));
+    sim_->set_curriculum_level(static_cast<real>(book_.progress(p_.curriculum)));
     infos_.curriculum_level = book_.level;
   }
 
-  void goal_error_vehicle(int env, float e_v[3]) const {
-    const task_access::RobotView r = task_access::robot(*world_, env);
-    const Vec3 e = world_->target(env, 0) - r.position_w;
-    const auto& qc = r.orientation_wb.coeffs();  // xyzw
-    const float q[4] = {static_cast<float>(qc[0]), static_cast<float>(qc[1]), static_cast<float>(qc[2]),
-                        static_cast<float>(qc[3])};
-    const float e_w[3] = {static_cast<float>(e[0]), static_cast<float>(e[1]), static_cast<float>(e[2])};
-    vehicle_frame_error(q, e_w, e_v);
-  }
-
-  void clear_memory(int env) {
+  void on_reset(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
-    episode_reward_[i] = 0;
     for (int k = 0; k < kNavActionDim; ++k) action_[i * kNavActionDim + k] = action_prev_[i * kNavActionDim + k] = 0;
-    goal_error_vehicle(env, &err_prev_[i * 3]);  // the first "getting closer" of an episode is from its start
-  }
-
-  void reset_one(int env) override {
-    world_->reset_env(env);
-    const std::size_t i = static_cast<std::size_t>(env);
-    rewards_[i] = 0;
-    terminations_[i] = 0;
-    truncations_[i] = 0;
-    clear_memory(env);
-    write_obs(env);
+    error_vehicle(env, &err_prev_[i * 3]);  // the first "getting closer" of an episode is from its start
   }
 
   void write_obs(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
     float* o = &obs_[i * static_cast<std::size_t>(obs_dim_)];
-    const task_access::RobotView r = task_access::robot(*world_, env);
-    float e_v[3];
-    goal_error_vehicle(env, e_v);
-    const Vec3 eul = euler_xyz(r.orientation_wb);  // ssa: wrapped to [-pi, pi)
-    float v_b[3], w_b[3];
-    for (int k = 0; k < 3; ++k) v_b[k] = static_cast<float>(r.linvel_b[k]);
-    for (int k = 0; k < 3; ++k) w_b[k] = static_cast<float>(r.angvel_b[k]);
-    nav::write_state_obs(e_v, static_cast<float>(eul[0]), static_cast<float>(eul[1]), v_b, w_b,
-                         &action_[i * kNavActionDim], o);
-    min_pool_ranges(world_->sensor_ranges(env, sensor_), world_->sensor_height(sensor_), world_->sensor_width(sensor_),
-                    max_range_m_, p_.pool_rows, p_.pool_cols, o + kNavStateObs);
+    float e_v[3], v_b[3], w_b[3];
+    error_vehicle(env, e_v);
+    for (int k = 0; k < 3; ++k) v_b[k] = static_cast<float>(sim_->base_lin_vel_b()[3 * i + k]);
+    for (int k = 0; k < 3; ++k) w_b[k] = static_cast<float>(sim_->base_ang_vel_b()[3 * i + k]);
+    const real* eul = sim_->base_euler_xyz() + 3 * i;  // ssa: wrapped to [-pi, pi)
+    nav::write_state_obs(e_v, static_cast<float>(eul[0]), static_cast<float>(eul[1]), v_b, w_b, &action_[i * kNavActionDim], o);
+    task_support::pool_image(sim_->range_image(env, 0), p_.pool_rows, p_.pool_cols, o + kNavStateObs);
   }
 
   NavigationParams p_;
-  int sensor_ = 0;
-  real max_range_m_ = 1;
-  int len_ = 0;
+  bool flat_ = false, scan_ = false;
+  int view_begin_ = 0, view_end_ = 0;  // a scan's sectors the scripted policy reads
   float success_radius_m_ = 1.0f;
   nav::EpisodeBook book_;
-  std::vector<double> episode_reward_;
   std::vector<float> err_prev_, action_, action_prev_;
-  std::vector<std::uint8_t> ended_;
 };
 
 }  // namespace
 
-std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error) {
-  if (config.robot.robots_per_env != 1) {
-    error = "navigation_task needs robots_per_env = 1";
-    return nullptr;
-  }
+std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, Backend backend,
+                                           std::string& error) {
+  const std::string pre = backend == Backend::planar ? "simulator planar: task navigation_task: " : "navigation_task ";
   if (config.controller.kind != ControllerKind::lee_velocity) {
-    error = "navigation_task needs controller lee_velocity_control (got " + config.controller.name + ")";
+    error = pre + "needs controller lee_velocity_control (got " + config.controller.name + ")";
     return nullptr;
   }
   if (config.task.kind != TaskKind::position_setpoint) {
-    error = "navigation_task needs a position_setpoint task kind (a goal per episode)";
+    error = pre + "needs a position_setpoint task kind (a goal per episode)";
     return nullptr;
   }
   const NavigationCurriculum& c = params.curriculum;
   if (c.min_level > c.max_level || c.check_after_episodes < 1 || c.increase_step < 0 || c.decrease_step < 0) {
-    error = "navigation_task curriculum: expected min_level <= max_level, check_after_episodes >= 1, steps >= 0";
+    error = pre + "curriculum: expected min_level <= max_level, check_after_episodes >= 1, steps >= 0";
     return nullptr;
   }
   if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || params.pool_rows < 1 || params.pool_cols < 1) {
-    error = "navigation_task: expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, pool_rows and pool_cols >= 1";
-    return nullptr;
-  }
-  int sensor = -1;
-  for (std::size_t k = 0; k < config.robot.sensors.size() && sensor < 0; ++k)
-    if (config.robot.sensors[k].kind != SensorKind::imu) sensor = static_cast<int>(k);
-  if (sensor < 0) {
-    error = "navigation_task needs a ray sensor (lidar, ToF or camera) on the robot for its image observation, e.g. "
-            "`sensors: [vl53l5cx]`";
+    error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, pool_rows and pool_cols >= 1";
     return nullptr;
   }
   WorldConfig wc = config;
   const int span = c.max_level - c.min_level;
   const int start = std::min(std::max(c.start_level, c.min_level), c.max_level);
   wc.env.curriculum_level = span > 0 ? static_cast<real>(start - c.min_level) / static_cast<real>(span) : 0;
-  std::unique_ptr<World> w = World::create(wc, error);
-  if (!w) return nullptr;
-  if (w->sensor_height(sensor) < params.pool_rows || w->sensor_width(sensor) < params.pool_cols) {
-    error = "navigation_task: sensor " + config.robot.sensors[static_cast<std::size_t>(sensor)].name + " image (" +
-            std::to_string(w->sensor_height(sensor)) + " x " + std::to_string(w->sensor_width(sensor)) +
-            ") is smaller than the pool grid (" + std::to_string(params.pool_rows) + " x " +
-            std::to_string(params.pool_cols) + ")";
-    return nullptr;
-  }
-  return std::unique_ptr<Task>(new NavigationTask(std::move(w), params, sensor));
+  task_support::TaskNeeds needs;
+  needs.id = "navigation_task";
+  needs.prefix = "navigation_task ";
+  needs.image = true;
+  needs.image_rows = params.pool_rows;
+  needs.image_cols = params.pool_cols;
+  std::unique_ptr<Simulator> s = task_support::make_task_simulator(wc, backend, needs, error);
+  if (!s) return nullptr;
+  return std::unique_ptr<Task>(new NavigationTask(std::move(s), params));
 }
 
 TaskConfig navigation_task_config() {

@@ -15,14 +15,20 @@ namespace kestrel::policy {
 /// orientation quaternion xyzw, linear velocity (body, m/s), angular velocity (body, rad/s)].
 constexpr int kPositionSetpointObsDim = 13;
 
+/// From flat state views (the Simulator's base_* arrays, or a firmware's estimate).
+inline void position_setpoint_observation(const real pos_w[3], const real quat_xyzw[4], const real lin_vel_b[3],
+                                          const real ang_vel_b[3], const real target_w[3], float* obs) {
+  for (int k = 0; k < 3; ++k) obs[k] = static_cast<float>(target_w[k] - pos_w[k]);
+  for (int k = 0; k < 4; ++k) obs[3 + k] = static_cast<float>(quat_xyzw[k]);
+  for (int k = 0; k < 3; ++k) obs[7 + k] = static_cast<float>(lin_vel_b[k]);
+  for (int k = 0; k < 3; ++k) obs[10 + k] = static_cast<float>(ang_vel_b[k]);
+}
+
+/// From a rigid-body state (world-frame linear velocity rotated into the body frame).
 inline void position_setpoint_observation(const RigidBodyState& st, const Vec3& target_w, float* obs) {
-  const Vec3 e = target_w - st.position_w;
-  const auto& q = st.orientation_wb.coeffs();  // Eigen stores xyzw
-  for (int k = 0; k < 3; ++k) obs[k] = static_cast<float>(e[k]);
-  for (int k = 0; k < 4; ++k) obs[3 + k] = static_cast<float>(q[k]);
   const Vec3 v_b = rotate_inverse(st.orientation_wb, st.linvel_w);
-  for (int k = 0; k < 3; ++k) obs[7 + k] = static_cast<float>(v_b[k]);
-  for (int k = 0; k < 3; ++k) obs[10 + k] = static_cast<float>(st.angvel_b[k]);
+  const auto& q = st.orientation_wb.coeffs();  // Eigen stores xyzw
+  position_setpoint_observation(st.position_w.data(), q.data(), v_b.data(), st.angvel_b.data(), target_w.data(), obs);
 }
 
 /// The same with the position error rotated about world z into the vehicle (yaw-only) frame, the

@@ -114,17 +114,18 @@ TaskConfig custom_task_config(const CustomTaskSpec& spec);
 /// Builds the custom task named by config.task.name with config's sim/env/robot/controller/sensors;
 /// the spec's solid objects are added to the environment.
 std::unique_ptr<Task> make_custom_task(const WorldConfig& config, std::string& error);
-/// As above with an explicit spec (for specs not registered, e.g. in tests).
-std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, std::string& error);
-
-/// The same on the planar backend (sim/src/tasks/planar_tasks.cpp; make_task(config,
-/// Backend::planar) calls it for registered ids): the fixed-altitude multirotor with
-/// lee_position_control or lee_velocity_control; solid objects become task-owned Box2D boxes
-/// (x / y extents; Simulator::set_obstacle_box at every reset); the terms see the objects at the
+/// As above with an explicit spec (for specs not registered, e.g. in tests), on `backend`.
+/// Rigid: lee_position_control, lee_velocity_control or lee_attitude_control; the objects are 3-D
+/// boxes. Planar: the fixed-altitude multirotor with lee_position_control or lee_velocity_control;
+/// solid objects become task-owned Box2D boxes (x / y extents); the terms see the objects at the
 /// flight altitude (z errors 0, horizontal distances) and inside_box checks x / y only (the height
-/// threshold does not apply at a fixed altitude); image_pool pools the 2-D lidar (default 128 beams)
-/// into one row of rows * cols sectors (the same observation size). The ground vehicle is refused.
-std::unique_ptr<Task> make_planar_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, std::string& error);
+/// threshold does not apply at a fixed altitude); image_pool pools the 2-D lidar (default 128
+/// beams) into one row of rows * cols sectors (the same observation size). The ground vehicle is
+/// refused. In both, Simulator::set_obstacle_boxes moves the objects at every reset.
+std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, Backend backend, std::string& error);
+inline std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTaskSpec& spec, std::string& error) {
+  return make_custom_task(config, spec, Backend::rigid, error);
+}
 
 /// Extra access a custom task gives tests and tools (make_custom_task returns a Task whose
 /// dynamic type implements it; custom_task_view() returns null for other tasks).

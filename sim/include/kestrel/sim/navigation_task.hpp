@@ -91,16 +91,16 @@ int navigation_obs_dim(const NavigationParams& p);
 /// Its scripted_actions() (not a reference feature; for `kestrel run --policy scripted`): velocity
 /// towards the goal at full speed, yaw towards it, and a reactive dodge to the clearest side of
 /// the pooled image when its central half sees something within 0.65 of the sensor's range.
-/// Builds the task: needs robots_per_env = 1, controller lee_velocity_control and a ray sensor
-/// (lidar, ToF or camera) on the robot; nullptr and a message otherwise.
-std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error);
-
-/// The same task on the planar backend (sim/src/tasks/planar_tasks.cpp): the fixed-altitude
-/// multirotor on lee_velocity_control, the 2-D lidar (simulator.lidar_beams, 128 if 0) pooled into
-/// pool_rows * pool_cols sectors as one image row (same obs_dim), vertical velocity dropped,
-/// curriculum through Simulator::set_curriculum_level. make_task(config, Backend::planar, error)
-/// calls it for "navigation_task".
-std::unique_ptr<Task> make_planar_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error);
+/// Builds the task on `backend`: needs robots_per_env = 1, controller lee_velocity_control and a
+/// range image: on rigid a ray sensor (lidar, ToF or camera) on the robot; on planar the
+/// fixed-altitude multirotor's 2-D lidar (simulator.lidar_beams, 128 if 0) pooled into pool_rows *
+/// pool_cols sectors as one image row (same obs_dim), vertical velocity dropped. nullptr and a
+/// message otherwise. make_task(config, backend, error) calls it for "navigation_task".
+std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, Backend backend,
+                                           std::string& error);
+inline std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const NavigationParams& params, std::string& error) {
+  return make_navigation_task(config, params, Backend::rigid, error);
+}
 
 /// The registered TaskConfig (registries().tasks "navigation_task").
 TaskConfig navigation_task_config();

@@ -22,10 +22,12 @@
 //
 // What a task sits on (the narrow API): num_envs/num_robots/action_dim, step(actions) with
 // post_physics_step's reset_buf, reset_idx, reset_root_states, push_robots, the base_* views,
-// contact_forces_w/crashed, target_w, lidar_ranges_m (or rigid_world(sim)->sensor_* on rigid, sim/rigid_backend.hpp), env_bounds,
+// contact_forces_w/crashed, target_w, range_image (rigid: the robot's ray sensors; planar: the 2-D
+// lidar as one row), holds_altitude, env_bounds, set_obstacle_boxes (task-owned objects),
 // set_auto_reset / set_curriculum_level (the task owns episode ends and the obstacle curriculum),
-// and the domain-randomisation views for privileged observations. Nothing else of either backend
-// (the planar tasks, sim/src/tasks/planar_tasks.cpp, use exactly this).
+// and the domain-randomisation views for privileged observations. The tasks (sim/src/tasks/) are
+// written once over exactly this and run on both backends; nothing else of either is reachable
+// from them.
 //
 // Determinism: per-environment streams RngStream(seed, env, purpose); environments never read each
 // other, so results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes it).
@@ -33,6 +35,7 @@
 // block allocator and broad-phase buffers have warmed up; see planar.cpp and the heap test).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -54,6 +57,26 @@ const char* backend_name(Backend b);
 /// KESTREL_SIMULATOR (read now) if set and non-empty, else config.simulator.backend if non-empty,
 /// else rigid. An unknown name gives false and a message naming where it came from.
 [[nodiscard]] bool resolve_backend(const WorldConfig& config, Backend& out, std::string& error);
+
+/// One ray-sensor range image as a task reads it: element (r, c), r in [0, height) from the top,
+/// c in [0, width) from the left, is ranges[r * row_step + c * col_step] (metres; in [0, 1] when
+/// the sensor normalises, then max_range_m is 1). Negative, non-finite or >= max_range_m: no return.
+struct RangeImage {
+  const real* ranges = nullptr;
+  int height = 0, width = 0;
+  std::ptrdiff_t row_step = 0, col_step = 1;
+  real max_range_m = 1;
+  real horizontal_fov_rad = 0;  // the columns' span
+  real at(int r, int c) const { return ranges[r * row_step + c * col_step]; }
+};
+
+/// A task-owned box obstacle (Simulator::set_obstacle_boxes).
+struct ObstacleBox {
+  int asset_class = 0;
+  Vec3 center_w = Vec3::Zero();
+  Vec3 half_extents_m = Vec3::Constant(0.5_r);
+  real yaw_rad = 0;
+};
 
 /// Random stream purpose of push_robots (above kPurposeUser, see kernel/rng.hpp).
 constexpr std::uint32_t kPurposePush = kPurposeUser + 5;
@@ -114,13 +137,18 @@ class Simulator {
   void push_robots();
 
   // State views (refreshed by post_physics_step, reset_idx, reset_root_states and push_robots).
+  // The derived ones (Euler angles, applied wrench, motor and gain scales) may be computed when
+  // their accessor is called rather than after every step (rigid: a task that does not read them
+  // does not pay for them), so a caller holding one of those pointers across a step calls the
+  // accessor again (Python: reads the property again).
   const real* base_pos_w() const { return pos_w_.data(); }            // (robots x 3) m
   const real* base_quat_xyzw() const { return quat_xyzw_.data(); }    // (robots x 4)
-  const real* base_euler_xyz() const { return euler_xyz_.data(); }    // (robots x 3) rad
+  const real* base_euler_xyz() const { return fresh(kLazyEuler, euler_xyz_); }  // (robots x 3) rad
   const real* base_lin_vel_b() const { return lin_vel_b_.data(); }    // (robots x 3) m/s, body
+  const real* base_lin_vel_w() const { return lin_vel_w_.data(); }    // (robots x 3) m/s, world
   const real* base_ang_vel_b() const { return ang_vel_b_.data(); }    // (robots x 3) rad/s, body
   const real* contact_forces_w() const { return contact_w_.data(); }  // (robots x 3) N
-  const real* applied_wrench_b() const { return wrench_b_.data(); }   // (robots x 6) N, N m
+  const real* applied_wrench_b() const { return fresh(kLazyWrench, wrench_b_); }  // (robots x 6) N, N m
   const real* target_w() const { return target_w_.data(); }           // (robots x 3) m
   const std::uint8_t* crashed() const { return crashed_.data(); }     // (robots)
   const std::uint8_t* reset_buf() const { return reset_buf_.data(); } // (envs) episode ended last step
@@ -129,9 +157,9 @@ class Simulator {
   const real* added_mass_kg() const { return added_mass_kg_.data(); }
   const real* com_bias_b_m() const { return com_bias_b_m_.data(); }    // (robots x 3)
   /// Multirotor: motor time constant / its nominal value; ground vehicle: drive force scale.
-  const real* motor_constant_scale() const { return motor_scale_.data(); }
+  const real* motor_constant_scale() const { return fresh(kLazyScales, motor_scale_); }
   /// Active controller gains / nominal gains (Lee: mean over the 12 gain components).
-  const real* controller_gain_scale() const { return gain_scale_.data(); }
+  const real* controller_gain_scale() const { return fresh(kLazyScales, gain_scale_); }
 
   /// 2-D lidar (planar; 0 beams on rigid, whose ray sensors are the World's, rigid_world(sim)->sensor_*).
   int lidar_beams() const { return lidar_beams_; }
@@ -139,21 +167,28 @@ class Simulator {
   /// Beam k's angle in the body frame (rad, counter-clockwise from body x).
   real lidar_beam_angle(int k) const;
 
-  /// Task-owned box obstacles (planar): puts the box of asset class `asset_class` (its first
-  /// slot; the task reserves the class at creation, e.g. a cube class with keep_in_env and one
-  /// asset) at centre (center_x_w, center_y_w), half extents (half_x_m, half_y_m), yaw yaw_rad,
-  /// from now on (until the next call or the class's next layout draw), and re-renders env's
-  /// lidar. Edits the slot's pre-created Box2D fixture (no heap). False (nothing changed,
-  /// last_error() says why) for a bad env / class, a class without box slots, or non-finite or
-  /// non-positive sizes; always false on rigid, whose tasks move World obstacles (World::obstacle
-  /// + obstacles_changed).
-  [[nodiscard]] virtual bool set_obstacle_box(int env, int asset_class, real center_x_w, real center_y_w, real half_x_m,
-                                              real half_y_m, real yaw_rad) {
-    (void)env, (void)asset_class, (void)center_x_w, (void)center_y_w, (void)half_x_m, (void)half_y_m, (void)yaw_rad;
-    return fail(std::string("simulator ") + backend_name() +
-                ": set_obstacle_box applies to the planar backend's task-owned slots; on rigid a task moves World "
-                "obstacles (World::obstacle, World::obstacles_changed)");
-  }
+  /// Ray-sensor images a task reads (navigation_task's pooled depth, a custom task's image_pool),
+  /// the same shape on every backend: rigid gives each robot's ray sensors (lidar, ToF, camera; in
+  /// the order of robot.sensors, IMUs skipped) as rendered by the World; planar gives its 2-D lidar
+  /// as one image row. Column 0 is the leftmost (body +y side), row 0 the top.
+  int num_range_images() const { return num_range_images_; }
+  /// Robot i's k-th image (0 <= k < num_range_images()), valid until the next state change.
+  virtual RangeImage range_image(int robot, int k) const = 0;
+
+  /// True where the backend holds the robots at a fixed altitude (planar multirotor): tasks then
+  /// drop vertical commands and measure errors in x and y only.
+  bool holds_altitude() const { return holds_altitude_; }
+  /// The held altitude (simulator.altitude_m) when holds_altitude(), else 0.
+  real altitude_m() const { return altitude_m_; }
+
+  /// Task-owned box obstacles: each box goes to the first obstacle slot of its asset class in env
+  /// (the task reserves one class per object at creation, e.g. a cube class with keep_in_env and
+  /// one asset), from now on until the next call or the class's next layout draw, and env's sensor
+  /// images are re-rendered once. Rigid: a 3-D box, yaw about z; planar: its x / y footprint (the
+  /// pre-created Box2D fixture is edited: no heap). False (nothing changed, last_error() says
+  /// why) for a bad env or class, a class without box slots, or non-finite or non-positive sizes.
+  [[nodiscard]] virtual bool set_obstacle_boxes(int env, const ObstacleBox* boxes, int count) = 0;
+  [[nodiscard]] bool set_obstacle_box(int env, const ObstacleBox& box) { return set_obstacle_boxes(env, &box, 1); }
 
   /// In-step allocations that found their environment's fixed arena full and went to the heap
   /// (planar: Box2D's growth; see planar.cpp). 0 on rigid, which never allocates in a step.
@@ -168,12 +203,26 @@ class Simulator {
   explicit Simulator(Backend b) : backend_(b) {}
   /// Sizes every view for the config's robots (called by the backends' set-up).
   void allocate_views(const WorldConfig& cfg, int action_dim, int lidar_beams);
-  /// Writes the views of robot i from a 3-D state.
-  void write_state_view(std::size_t i, const RigidBodyState& s);
+  /// Writes the views of robot i from a 3-D state (with_euler false: the Euler view is left to
+  /// fill_lazy_views).
+  void write_state_view(std::size_t i, const RigidBodyState& s, bool with_euler = true);
+  /// Euler view of robot i from its quaternion view (the same bits as write_state_view's).
+  void write_euler_view(std::size_t i) const;
   /// Runs the physics steps of every environment with the current actions.
   virtual void advance() = 0;
   /// Sets robot i's world-frame linear velocity x and y (push_robots).
   virtual void set_velocity_xy(int env, int robot, real vx_w, real vy_w) = 0;
+  /// Derived views a backend computes on demand: flag them in lazy_ when the state changes and
+  /// fill them in fill_lazy_views (the accessor calls it once per change).
+  enum : std::uint8_t { kLazyEuler = 1, kLazyWrench = 2, kLazyScales = 4 };
+  virtual void fill_lazy_views(std::uint8_t which) const { (void)which; }
+  const real* fresh(std::uint8_t which, const std::vector<real>& v) const {
+    if ((lazy_ & which) != 0) {
+      fill_lazy_views(which);
+      lazy_ = static_cast<std::uint8_t>(lazy_ & ~which);
+    }
+    return v.data();
+  }
   bool fail(const std::string& m) {
     error_ = m;
     return false;
@@ -182,12 +231,18 @@ class Simulator {
   WorldConfig cfg_;
   Backend backend_;
   bool ground_vehicle_ = false;
+  bool holds_altitude_ = false;
+  real altitude_m_ = 0;
+  int num_range_images_ = 0;
   bool actions_given_ = false;  // the current step() got an action array (rigid: else the World's own)
   int num_envs_ = 0, robots_per_env_ = 0, action_dim_ = 0, decimation_ = 1, lidar_beams_ = 0;
   std::vector<real> actions_;  // (robots x action_dim)
-  std::vector<real> pos_w_, quat_xyzw_, euler_xyz_, lin_vel_b_, ang_vel_b_, contact_w_, wrench_b_, target_w_;
+  std::vector<real> pos_w_, quat_xyzw_, lin_vel_b_, lin_vel_w_, ang_vel_b_, contact_w_, target_w_;
+  mutable std::vector<real> euler_xyz_, wrench_b_;  // derived: may be filled on demand (lazy_)
   std::vector<std::uint8_t> crashed_, reset_buf_;
-  std::vector<real> added_mass_kg_, com_bias_b_m_, motor_scale_, gain_scale_;
+  std::vector<real> added_mass_kg_, com_bias_b_m_;
+  mutable std::vector<real> motor_scale_, gain_scale_;
+  mutable std::uint8_t lazy_ = 0;
   std::vector<real> lidar_;
   std::vector<RngStream> rng_push_;
   std::string error_;

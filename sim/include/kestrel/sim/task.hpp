@@ -1,4 +1,4 @@
-// Reinforcement-learning tasks over the batched World, shaped like Aerial Gym's task API
+// Reinforcement-learning tasks over the Simulator interface (any backend), shaped like Aerial Gym's task API
 // (ntnu-arl/aerial_gym_simulator, commit f0d0f05: aerial_gym/task/base_task.py and
 // task/position_setpoint_task/position_setpoint_task.py): reset(), reset_idx(env_ids) and
 // step(actions) -> (observations, rewards, terminations, truncations, infos), with the auto-reset
@@ -21,12 +21,9 @@
 
 #include "kestrel/kernel/types.hpp"
 #include "kestrel/sim/config.hpp"
-#include "kestrel/sim/world.hpp"
+#include "kestrel/sim/simulator.hpp"
 
 namespace kestrel::sim {
-
-class Simulator;
-enum class Backend : std::uint8_t;
 
 /// Aerial Gym's `infos` is an empty dict in this task; here it carries the running episode
 /// statistics instead (summed over every episode finished since the task was built).
@@ -56,11 +53,11 @@ class Task {
   int action_dim() const { return action_dim_; }
 
   /// Resets every environment; observations() then holds the first observations, rewards and
-  /// flags are zero (Aerial Gym's reset() returning the tuple). Default: reset_one for each.
-  virtual void reset();
+  /// flags are zero (Aerial Gym's reset() returning the tuple).
+  void reset();
   /// Resets the listed environments only (their observation rows are rewritten); ids outside
-  /// [0, num_envs) are ignored. Default: reset_one for each valid id.
-  virtual void reset_idx(const int* env_ids, int count);
+  /// [0, num_envs) are ignored.
+  void reset_idx(const int* env_ids, int count);
   /// One task step: `actions` is num_envs x action_dim floats (row-major).
   virtual void step(const float* actions) = 0;
   /// The task's built-in scripted controller (what `kestrel run --policy scripted` drives):
@@ -82,47 +79,69 @@ class Task {
   void set_keep_final_observations(bool on);
   const float* final_observations() const { return final_obs_.empty() ? nullptr : final_obs_.data(); }
 
-  /// The 3-D World the task runs on (rigid backend). Only valid when has_world(): a task built
-  /// on the planar backend (make_task with Backend::planar) runs on simulator() instead.
-  World& world() { return *world_; }
-  const World& world() const { return *world_; }
-  bool has_world() const { return world_ != nullptr; }
-  /// The Simulator the task runs on (planar tasks); nullptr for tasks on the World.
-  Simulator* simulator() { return sim_.get(); }
-  const Simulator* simulator() const { return sim_.get(); }
-  /// "rigid" (World) or "planar" (Simulator).
+  /// The Simulator the task runs on (whichever backend; a task reads and writes nothing else).
+  Simulator& simulator() { return *sim_; }
+  const Simulator& simulator() const { return *sim_; }
+  /// "rigid" or "planar".
   const char* backend_name() const;
-  /// Threads and state hash of whichever of the two the task runs on.
   int num_threads() const;
   std::uint64_t state_hash() const;
+  /// Environment env's env-steps in its current episode (0 right after a reset).
+  int episode_step(int env) const { return episode_step_[static_cast<std::size_t>(env)]; }
 
  protected:
+  /// Takes the Simulator (its auto-reset is turned off: the task decides when an episode ends
+  /// and reads the final state before resetting it).
+  Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim);
+
   /// Resets one environment (a valid id): new episode, its observation row rewritten.
-  virtual void reset_one(int env) = 0;
+  void reset_one(int env) { reset_envs(&env, 1); }
+  /// Resets the listed environments in one Simulator::reset_idx call, then on_reset and the
+  /// observation row of each, with rewards and flags cleared.
+  void reset_envs(const int* env_ids, int count);
+  /// After step(): the environments flagged in ended_ keep their final observation (when asked)
+  /// and are reset in one Simulator::reset_idx call, then on_reset for each.
+  void reset_ended();
+  /// The task's own reset of env after the Simulator's (its memory, its objects).
+  virtual void on_reset(int env) = 0;
   /// Writes environment env's observation row from the current state (every task has one).
   virtual void write_obs(int env) = 0;
-  /// Called by step() for an environment that ended, before its auto-reset: with final
-  /// observations on, writes its observation row and copies it to final_observations(); else nothing.
+  /// Called for an environment that ended, before its reset: with final observations on, writes
+  /// its observation row and copies it to final_observations(); else nothing.
   void keep_final_obs(int env);
-  Task(std::unique_ptr<World> world, int obs_dim, int action_dim);
-  Task(std::unique_ptr<Simulator> sim, int obs_dim, int action_dim);
-  std::unique_ptr<World> world_;
+
+  // Robot 0 of env as the tasks read it, from the Simulator's views.
+  Vec3 position(int env) const;
+  void quat_xyzw(int env, float q[4]) const;
+  /// target - position (world frame) and the same in the vehicle (yaw-only) frame.
+  void error_world(int env, float e_w[3]) const;
+  void error_vehicle(int env, float e_v[3]) const;
+  /// Contact crash (force above the env's threshold) or exit from the bounds (episode.hpp's
+  /// margin; x and y only where the backend holds the altitude).
+  bool crash_or_out(int env) const;
+
   std::unique_ptr<Simulator> sim_;
   int num_envs_ = 0, obs_dim_ = 0, action_dim_ = 0;
+  int len_ = 0;  // task.episode_len_env_steps
   std::vector<float> obs_, rewards_;
   std::vector<std::uint8_t> terminations_, truncations_;
   std::vector<float> final_obs_;  // empty unless set_keep_final_observations(true)
+  std::vector<int> episode_step_;
+  std::vector<double> episode_reward_;
+  std::vector<std::uint8_t> ended_;
+  std::vector<int> reset_ids_;
+  std::vector<real> sim_actions_;  // (robots x Simulator::action_dim)
   TaskInfos infos_;
 };
 
 /// Builds the task named by config.task.name: "position_setpoint_task", "navigation_task"
-/// (navigation_task.hpp) or a custom task id (custom_task.hpp), on the 3-D World whatever
+/// (navigation_task.hpp) or a custom task id (custom_task.hpp), on the rigid backend whatever
 /// config.simulator says (the backend overload below takes resolve_backend's choice, as `kestrel
 /// run` does). Returns nullptr and a message (listing the task ids) for an unknown task or a bad config.
 std::unique_ptr<Task> make_task(const WorldConfig& config, std::string& error);
-/// The same on an explicit backend: rigid is make_task above; planar builds the task on the Box2D
-/// backend (sim/src/tasks/planar_tasks.cpp: navigation_task, position_setpoint_task and the
-/// custom tasks such as goal_box_through_gap on the fixed-altitude multirotor), or nullptr and a
+/// The same on an explicit backend. Each task is one class over the Simulator (sim/src/tasks/);
+/// on planar it flies the fixed-altitude multirotor (navigation_task, position_setpoint_task and
+/// the custom tasks such as goal_box_through_gap), or nullptr and a
 /// message naming the backend and the alternative for a task that does not apply there (the
 /// ground vehicle, attitude or rate controllers).
 std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error);
@@ -146,6 +165,8 @@ bool task_defaults(const std::string& task_name, TaskDefaults& out);
 /// divided by max_range_m and clamped to [0, 1]; pixels with no valid return (negative,
 /// non-finite, beyond max_range_m) count as max_range_m. Needs rows <= height, cols <= width.
 void min_pool_ranges(const real* ranges, int height, int width, real max_range_m, int rows, int cols, float* out);
+/// The same over a Simulator range image (any row / column step).
+void min_pool_image(const RangeImage& img, int rows, int cols, float* out);
 
 // ---- position_setpoint_task ---------------------------------------------------------------------
 
@@ -186,7 +207,10 @@ void vehicle_frame_error(const float quat_xyzw[4], const float err_world[3], flo
 ///   terminations: contact crash (World, force > threshold), out of bounds (World's 0.5 m margin)
 ///     or d > 8 m (the reward's crash rule); truncations: episode_len_env_steps env-steps reached
 ///     (Aerial Gym truncates at sim_steps > episode_len_steps, i.e. one step later).
-std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std::string& error);
+std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, Backend backend, std::string& error);
+inline std::unique_ptr<Task> make_position_setpoint_task(const WorldConfig& config, std::string& error) {
+  return make_position_setpoint_task(config, Backend::rigid, error);
+}
 
 /// The registered config of position_setpoint_task (registries().tasks "position_setpoint_task").
 TaskConfig position_setpoint_task_config();

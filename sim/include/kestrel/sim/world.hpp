@@ -145,6 +145,14 @@ class World {
   /// environment through obstacle(): recomputes their bounding boxes, restores the sweep order
   /// and re-renders the ray sensors (no heap).
   void obstacles_changed(int env);
+  /// Runs fn(context, begin, end) on each worker of step() right after that worker's slice
+  /// [begin, end) of environments has stepped (same static partition, no extra dispatch): the
+  /// rigid Simulator refreshes its flat views there, in parallel. nullptr: nothing.
+  using SliceHook = void (*)(void* context, int begin, int end);
+  void set_after_step(SliceHook fn, void* context) {
+    after_step_ = fn;
+    after_step_context_ = context;
+  }
 
   /// Worker entry (public for the thread pool's trampoline).
   void run_slice(int worker);
@@ -293,6 +301,8 @@ class World {
   std::uint64_t trace_base_ = 0;
 
   // Threads: static partition, pending env-steps for run_slice.
+  SliceHook after_step_ = nullptr;
+  void* after_step_context_ = nullptr;
   std::unique_ptr<ThreadPool> pool_;
   int pending_steps_ = 0;
   bool auto_reset_ = true;
