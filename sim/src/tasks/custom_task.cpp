@@ -417,9 +417,9 @@ class CustomTask final : public Task, public CustomTaskView {
       boxes_.push_back(b);
     }
     // Checked at creation (positive finite extents, finite centres, one box slot per solid
-    // object), so this holds; a refusal would leave last_error() set and the objects where they were.
-    const bool ok = sim_->set_obstacle_boxes(env, boxes_.data(), static_cast<int>(boxes_.size()));
-    (void)ok;
+    // object; make_custom_task refuses a task whose first reset was refused), so this holds; a
+    // refusal leaves last_error() set and the objects where they were, and is latched here.
+    if (!sim_->set_obstacle_boxes(env, boxes_.data(), static_cast<int>(boxes_.size()))) boxes_refused_ = true;
     custom_terms::reset_progress(spec_, res_, seen(env), position(env), &prev_dist_[i * spec_.rewards.size()]);
     for (int a = 0; a < kActionDim; ++a) action_[i * kActionDim + a] = action_prev_[i * kActionDim + a] = 0;
   }
@@ -446,6 +446,10 @@ class CustomTask final : public Task, public CustomTaskView {
   std::vector<float> prev_dist_;      // envs x reward terms (progress_to)
   std::vector<float> action_, action_prev_;
   std::vector<ObstacleBox> boxes_;    // one reset's solid objects
+  bool boxes_refused_ = false;        // a set_obstacle_boxes refusal (Simulator::last_error says why)
+
+ public:
+  bool boxes_refused() const { return boxes_refused_; }
   std::vector<RngStream> rng_;
 };
 
@@ -519,7 +523,12 @@ std::unique_ptr<Task> make_custom_task(const WorldConfig& config, const CustomTa
     }
   std::unique_ptr<Simulator> s = task_support::make_task_simulator(wc, backend, needs, error);
   if (!s) return nullptr;
-  return std::unique_ptr<Task>(new CustomTask(std::move(s), spec, std::move(slot_class)));
+  std::unique_ptr<CustomTask> t(new CustomTask(std::move(s), spec, std::move(slot_class)));
+  if (t->boxes_refused()) {  // the constructor's reset placed the objects: a refusal is a bad spec
+    error = where + t->simulator().last_error();
+    return nullptr;
+  }
+  return t;
 }
 
 const CustomTaskView* custom_task_view(const Task& task) { return dynamic_cast<const CustomTaskView*>(&task); }
