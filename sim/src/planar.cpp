@@ -964,7 +964,7 @@ class PlanarSimulator final : public Simulator {
     if (timeout) {
       ++es.timeouts;
       bool ok = true;
-      for (int r = 0; r < robots_per_env_; ++r) ok = ok && distance_to_target(ei, r) <= cfg_.task.success_radius_m;
+      for (int r = 0; r < robots_per_env_; ++r) ok = ok && within_success_radius(distance_to_target(ei, r), cfg_.task.success_radius_m);
       es.successes += ok ? 1u : 0u;
     }
     if (out) ++es.out_of_bounds;

@@ -220,12 +220,12 @@ TEST(NavigationTask, CurriculumFollowsSuccessRate) {
     p.curriculum.check_after_episodes = 6;
     auto t = build(c, p);
     ASSERT_TRUE(t);
-    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.5f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).data().curriculum_level), 0.5f);
     const std::vector<float> zero(6 * 4, 0.0f);
     for (int s = 0; s < 30; ++s) t->step(zero.data());
     EXPECT_EQ(t->infos().curriculum_level, 2);  // three windows
     EXPECT_EQ(t->infos().curriculum_changes, 3u);
-    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.2f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).data().curriculum_level), 0.2f);
   }
   // The scripted policy in the empty env succeeds: the level rises by 2 per window.
   {
@@ -243,7 +243,7 @@ TEST(NavigationTask, CurriculumFollowsSuccessRate) {
     }
     EXPECT_EQ(t->infos().successes, 8u);
     EXPECT_EQ(t->infos().curriculum_level, 2);
-    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).config().env.curriculum_level), 0.2f);
+    EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).data().curriculum_level), 0.2f);
   }
 }
 

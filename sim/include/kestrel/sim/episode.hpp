@@ -23,4 +23,16 @@ inline bool out_of_bounds(const Vec3& p_w, const Vec3& lower_w, const Vec3& uppe
   return out_of_bounds(p_w.data(), lower_w.data(), upper_w.data(), axes);
 }
 
+/// The scripted task's moving setpoint (TaskConfig::setpoint_speed_m_s > 0): one env-step moves it
+/// by at most max_move_m (speed x env-step duration) straight towards the target.
+inline Vec3 advance_setpoint(const Vec3& setpoint_w, const Vec3& target_w, real max_move_m) {
+  const Vec3 to_target = target_w - setpoint_w;
+  const real len = to_target.norm();
+  return len <= max_move_m ? target_w : Vec3(setpoint_w + to_target * (max_move_m / len));
+}
+
+/// An episode that runs to its time limit succeeds when every robot ends within
+/// TaskConfig::success_radius_m of its target (3-D distance; the planar backend passes its own).
+inline bool within_success_radius(real distance_m, real success_radius_m) { return distance_m <= success_radius_m; }
+
 }  // namespace kestrel::sim

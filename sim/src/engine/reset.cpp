@@ -1,0 +1,289 @@
+// Episode set-up of the rigid World: bounds, obstacle layout, placement of starts and targets,
+// physics-step count and latency, the control chain's reset, sensor mounts.
+#include <algorithm>
+#include <cmath>
+
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/terrain.hpp"
+#include "kestrel/sim/world_stages.hpp"
+#include "world_internal.hpp"
+
+namespace kestrel::sim::stage {
+
+namespace al = kestrel::allocation;
+
+namespace {
+bool overlaps_obstacle(const WorldModel& m, const WorldData& d, int env, const Shape& s) {
+  Vec3 mn, mx;
+  shape_aabb(s, mn, mx);
+  const Obstacle* o = d.env_obstacles(env, m.obstacle_capacity);
+  for (int i = 0; i < d.num_obstacles[env]; ++i) {
+    // AABB rejection first: placement tests many candidates against every obstacle at each reset.
+    if ((o[i].aabb_max_w.array() < mn.array()).any() || (o[i].aabb_min_w.array() > mx.array()).any()) continue;
+    if (collide(s, o[i].shape).hit) return true;
+  }
+  return false;
+}
+}  // namespace
+
+void generate_layout(const WorldModel& m, WorldData& d, int env, RngStream& rng) {
+  const Vec3 lo = d.lower_w[env], hi = d.upper_w[env], span = hi - lo;
+  // data() + offset, not &v[i]: the empty environment has no obstacle slots (capacity 0).
+  Obstacle* slots = d.obstacles.data() + static_cast<std::size_t>(env) * m.obstacle_capacity;
+  int n = 0;
+  const real level = d.curriculum_level;
+  for (std::size_t ci = 0; ci < m.cfg.env.assets.size(); ++ci) {
+    const AssetClass& c = m.cfg.env.assets[ci];
+    auto emit = [&](const Shape& s) {
+      Obstacle& o = slots[n++];
+      o.shape = s;
+      o.semantic_id = static_cast<std::int16_t>(c.semantic_id);
+      o.kind = c.kind;
+      o.class_index = static_cast<std::uint8_t>(ci);
+      o.linvel_w = Vec3::Zero();
+      if (c.max_speed_m_s > 0) o.linvel_w = uniform_vec(rng, Vec3::Constant(-c.max_speed_m_s), Vec3::Constant(c.max_speed_m_s));
+      // Drawn only for rotating classes, so layouts without rotation keep their stream positions.
+      o.angvel_w = Vec3::Zero();
+      if (c.max_angular_speed_rad_s > 0 && c.kind != AssetKind::wall)
+        o.angvel_w = uniform_vec(rng, Vec3::Constant(-c.max_angular_speed_rad_s), Vec3::Constant(c.max_angular_speed_rad_s));
+    };
+    if (c.kind == AssetKind::wall) {
+      // Thin boxes just outside the bounds (they bound the flight volume, Aerial Gym's walls).
+      const real t = 0.05_r;
+      const Vec3 mid = (lo + hi) / 2;
+      Shape s;
+      s.type = ShapeType::box;
+      s.half_extents_m = Vec3(t, span[1] / 2 + t, span[2] / 2);
+      s.position_w = Vec3(lo[0] - t, mid[1], mid[2]);
+      emit(s);
+      s.position_w = Vec3(hi[0] + t, mid[1], mid[2]);
+      emit(s);
+      s.half_extents_m = Vec3(span[0] / 2 + t, t, span[2] / 2);
+      s.position_w = Vec3(mid[0], lo[1] - t, mid[2]);
+      emit(s);
+      s.position_w = Vec3(mid[0], hi[1] + t, mid[2]);
+      emit(s);
+      s.half_extents_m = Vec3(span[0] / 2 + t, span[1] / 2 + t, t);
+      s.position_w = Vec3(mid[0], mid[1], hi[2] + t);
+      emit(s);
+      continue;
+    }
+    const int count = c.keep_in_env ? c.num_assets
+                                    : c.min_num_assets + static_cast<int>(std::floor(
+                                          level * static_cast<real>(c.num_assets - c.min_num_assets) + 0.5_r));
+    for (int k = 0; k < count; ++k) {
+      const Vec3 ratio = uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
+      const Vec3 e = uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
+      const Vec3 size = uniform_vec(rng, c.min_size_m, c.max_size_m);
+      const Vec3 p = lo + ratio.cwiseProduct(span);
+      const Quat q = quat_from_euler_xyz(e[0], e[1], e[2]);
+      Shape s;
+      s.position_w = p;
+      s.orientation_wb = q;
+      switch (c.kind) {
+        case AssetKind::tree: {
+          // Procedural tree: trunk (size x = radius, z = height) standing on the ground, and
+          // kTreeBranches capsules leaving it at random heights, azimuths and tilts (size y =
+          // branch length). Parametric and randomised as Aerial Gym's generated forest URDFs.
+          const real r = size[0], h = size[2];
+          s.type = ShapeType::capsule;
+          s.radius_m = r;
+          s.half_length_m = h / 2;
+          s.orientation_wb = Quat::Identity();
+          s.position_w = Vec3(p[0], p[1], lo[2] + h / 2);
+          emit(s);
+          for (int b = 0; b < kTreeBranches; ++b) {
+            const real at = rng.uniform(0.4_r, 0.9_r) * h;
+            const real az = rng.uniform(0, kTwoPi);
+            const real tilt = rng.uniform(0.5_r, 1.1_r);  // rad from vertical
+            const real len = size[1] * rng.uniform(0.6_r, 1.0_r);
+            const Quat qb = quat_from_euler_xyz(0, tilt, az);
+            Shape br;
+            br.type = ShapeType::capsule;
+            br.radius_m = r * 0.5_r;
+            br.half_length_m = len / 2;
+            br.orientation_wb = qb;
+            br.position_w = Vec3(p[0], p[1], lo[2] + at) + rotate(qb, Vec3(0, 0, len / 2));
+            emit(br);
+          }
+          break;
+        }
+        case AssetKind::panel:  // thin plate: x thickness, y width, z height
+          s.type = ShapeType::box;
+          s.half_extents_m = Vec3(0.025_r, size[1] / 2, size[2] / 2);
+          emit(s);
+          break;
+        case AssetKind::cube:
+          s.type = ShapeType::box;
+          s.half_extents_m = Vec3::Constant(size[0] / 2);
+          emit(s);
+          break;
+        case AssetKind::small_wall:
+          s.type = ShapeType::box;
+          s.half_extents_m = Vec3(0.05_r, size[1] / 2, size[2] / 2);
+          emit(s);
+          break;
+        case AssetKind::rod:
+          s.type = ShapeType::capsule;
+          s.radius_m = size[0];
+          s.half_length_m = size[2] / 2;
+          emit(s);
+          break;
+        case AssetKind::thin:
+          s.type = ShapeType::cylinder;
+          s.radius_m = size[0];
+          s.half_length_m = size[2] / 2;
+          emit(s);
+          break;
+        case AssetKind::sphere:
+          s.type = ShapeType::sphere;
+          s.radius_m = size[0];
+          emit(s);
+          break;
+        case AssetKind::mesh:
+          s.type = ShapeType::convex_hull;
+          s.vertices = m.mesh_vertices[ci].data();
+          s.num_vertices = static_cast<int>(m.mesh_vertices[ci].size());
+          emit(s);
+          break;
+        case AssetKind::wall:
+          break;
+      }
+    }
+  }
+  d.num_obstacles[env] = n;
+  for (int i = 0; i < n; ++i) shape_aabb(slots[i].shape, slots[i].aabb_min_w, slots[i].aabb_max_w);
+  sort_sweep_order(slots, n);
+}
+
+bool clear_point(const WorldModel& m, const WorldData& d, int env, const Vec3& p) {
+  // Above the terrain by the bounding sphere and the clearance (heightfield / mesh terrain only:
+  // the ground plane lies under the bounds by construction).
+  if (m.terrain->type() != TerrainType::plane &&
+      !(p[2] - m.terrain->height_at(p[0], p[1]) > m.robot_bound_radius_m + m.cfg.task.clearance_m))
+    return false;
+  Shape s;
+  s.type = ShapeType::sphere;
+  s.radius_m = m.robot_bound_radius_m + m.cfg.task.clearance_m;
+  s.position_w = p;
+  return !overlaps_obstacle(m, d, env, s);
+}
+
+bool clear_segment(const WorldModel& m, const WorldData& d, int env, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const real len = ab.norm();
+  if (!(len > 1e-6_r)) return clear_point(m, d, env, a);
+  if (m.terrain->type() != TerrainType::plane) {
+    // The path over the terrain, checked every 0.1 m.
+    const int steps = static_cast<int>(len / 0.1_r) + 1;
+    for (int k = 0; k <= steps; ++k) {
+      const Vec3 p = a + ab * (static_cast<real>(k) / static_cast<real>(steps));
+      if (!(p[2] - m.terrain->height_at(p[0], p[1]) > m.robot_bound_radius_m + m.cfg.task.clearance_m)) return false;
+    }
+  }
+  // The swept bounding sphere: a capsule from a to b (local z along the segment).
+  Shape s;
+  s.type = ShapeType::capsule;
+  s.radius_m = m.robot_bound_radius_m + m.cfg.task.clearance_m;
+  s.half_length_m = len / 2;
+  s.position_w = (a + b) / 2;
+  s.orientation_wb = Quat::FromTwoVectors(Vec3::UnitZ(), ab / len);
+  return !overlaps_obstacle(m, d, env, s);
+}
+
+void reset_env(const WorldModel& m, WorldData& d, int env) {
+  RngStream& rng = d.rng_reset[env];
+  const EnvConfig& e = m.cfg.env;
+  d.lower_w[env] = uniform_vec(rng, e.lower_bound_min_m, e.lower_bound_max_m);
+  d.upper_w[env] = uniform_vec(rng, e.upper_bound_min_m, e.upper_bound_max_m);
+  if (d.layout_generation[env] == 0 || ++d.episodes_since_layout[env] >= e.keep_same_env_for_num_episodes) {
+    generate_layout(m, d, env, rng);
+    d.episodes_since_layout[env] = 0;
+    ++d.layout_generation[env];
+  }
+  const int ps = static_cast<int>(std::floor(
+      e.num_physics_steps_per_env_step_mean + e.num_physics_steps_per_env_step_std * rng.normal() + 0.5_r));
+  d.phys_steps[env] = std::max(1, ps);
+  d.latency[env] = e.sample_timestep_for_latency
+                      ? std::min(d.phys_steps[env], static_cast<int>(rng.next_u32() % static_cast<std::uint32_t>(e.max_latency_physics_steps + 1)))
+                      : 0;
+  d.episode_step[env] = 0;
+  const Vec3 lo = d.lower_w[env], span = d.upper_w[env] - d.lower_w[env];
+  for (int r = 0; r < m.robots_per_env; ++r) {
+    const std::size_t i = m.index(env, r);
+    RigidBodyState st;
+    // Start and target (TaskConfig::placement_attempts): all candidates are drawn first, always
+    // the same number, so the stream position after a reset does not depend on the layout; then
+    // the first candidate pair whose start and target clear the obstacles (and, with
+    // line_of_sight, the straight path between them) is kept. Fallbacks: the first pair with a
+    // clear start, else the first pair (a layout with no free space still resets).
+    const int attempts = m.cfg.task.placement_attempts;
+    Vec3 starts[kMaxPlacementAttempts], targets[kMaxPlacementAttempts];
+    for (int k = 0; k < attempts; ++k) {
+      starts[k] = lo + uniform_vec(rng, m.cfg.robot.min_init_position_ratio, m.cfg.robot.max_init_position_ratio).cwiseProduct(span);
+      targets[k] = lo + uniform_vec(rng, m.cfg.task.min_target_ratio, m.cfg.task.max_target_ratio).cwiseProduct(span);
+    }
+    const bool hover_task = m.cfg.task.kind == TaskKind::hover;
+    int chosen = -1, clear_start = -1;
+    for (int k = 0; k < attempts && chosen < 0; ++k) {
+      if (!clear_point(m, d, env, starts[k])) continue;
+      if (clear_start < 0) clear_start = k;
+      if (hover_task || (clear_point(m, d, env, targets[k]) && (!m.cfg.task.line_of_sight || clear_segment(m, d, env, starts[k], targets[k]))))
+        chosen = k;
+    }
+    // No clear pair: hover at the first clear start rather than fly into an obstacle.
+    const bool fallback = chosen < 0;
+    if (fallback) {
+      chosen = clear_start >= 0 ? clear_start : 0;
+      ++d.stats[env].placement_fallbacks;
+    }
+    st.position_w = starts[chosen];
+    const real yaw = rng.uniform(-m.cfg.robot.max_init_yaw_rad, m.cfg.robot.max_init_yaw_rad);
+    st.orientation_wb = quat_from_euler_xyz(0, 0, yaw);
+    d.state[i] = st;
+    real hover[al::kMaxRotors] = {};
+    const real per_motor = m.body.params.mass_kg * kStandardGravity / static_cast<real>(m.mr.airframe.num_rotors);
+    for (int j = 0; j < m.mr.airframe.num_rotors; ++j) hover[j] = per_motor;
+    // One stream for the gain and the motor draws, in that order (the World's order since the start).
+    if (robots::multirotor_reset(m.mr, d.mr_state[i], &rng, rng, hover) != Status::ok) ++d.status_count[static_cast<std::size_t>(env)];
+    // Task: the position setpoint (or the start point for hover) is the action of the episode.
+    d.target_w[i] = (hover_task || fallback) ? st.position_w : targets[chosen];
+    real* a = &d.actions[i * kMaxActionDim];
+    std::fill(a, a + kMaxActionDim, 0_r);
+    const bool moving = m.cfg.task.setpoint_speed_m_s > 0 && !hover_task;
+    d.setpoint_w[i] = moving ? st.position_w : d.target_w[i];
+    if (m.cfg.controller.kind == ControllerKind::lee_position) {
+      a[0] = d.setpoint_w[i][0];
+      a[1] = d.setpoint_w[i][1];
+      a[2] = d.setpoint_w[i][2];
+      a[3] = 0;
+    } else if (m.cfg.controller.kind == ControllerKind::direct_motor) {
+      for (int j = 0; j < m.mr.airframe.num_rotors; ++j) a[j] = per_motor;
+    }
+    std::copy(a, a + kMaxActionDim, &d.applied_actions[i * kMaxActionDim]);
+    d.contact_force_w[i] = Vec3::Zero();
+    d.contact_torque_b[i] = Vec3::Zero();
+    d.crashed[i] = 0;
+  }
+  // Sensor placement per reset (Aerial Gym's randomize_placement) from the placement stream, so
+  // the reset stream (layout, start, target) is the same with or without sensors.
+  for (int r = 0; r < m.robots_per_env; ++r) {
+    const std::size_t i = m.index(env, r);
+    for (std::size_t k = 0; k < m.sensors.size(); ++k) {
+      const SensorModel& s = m.sensors[k];
+      SensorData& sd = d.sensors[k];
+      if (s.kind == SensorKind::imu) {
+        sensors::imu_reset(m.cfg.robot.sensors[k].imu, sd.imu_state[i], d.rng_sensor[static_cast<std::size_t>(env)]);
+        sd.imu[i] = sensors::ImuSample();
+      } else {
+        sd.mounts[i] = sensors::sample_mount(s.mount, d.rng_place[static_cast<std::size_t>(env)]);
+      }
+    }
+  }
+  ++d.stats[env].resets;
+  // The new episode's first observation sees the new layout and start.
+  if (m.any_ray_sensor) render_ray_sensors(m, d, env, true);
+  if (m.height_points > 0) update_measured_heights(m, d, env);
+}
+
+}  // namespace kestrel::sim::stage

@@ -1,0 +1,93 @@
+// The rigid World's batched path: groups of batch::kLanes consecutive environments step their
+// robots through the batched twin of stage::robot_dynamics (sim/batch_step.hpp) in lockstep; the
+// rest of each env-step (setpoints, IMUs, obstacles, collision, statistics, resets, sensors) is the
+// scalar stages of step.cpp, run per environment in the same order as env_step. Environments never
+// read each other's state and the twin is bit-identical to the scalar robot step, so the result
+// does not depend on the grouping, on the thread partition or on whether the batched path is on
+// (tests/sim/batch_step_test.cpp).
+#include <cstring>
+
+#include "kestrel/sim/batch_step.hpp"
+#include "kestrel/sim/world_stages.hpp"
+
+namespace kestrel::sim::stage {
+
+namespace {
+// Software prefetch of one robot's per-step storage: at 4096+ environments a worker's robots no
+// longer fit in L2, and the motor state alone (448 bytes, six of its seven lines touched per step)
+// would otherwise miss on first touch. No effect on results.
+template <typename T>
+inline void prefetch(const T* p) {
+  const char* c = reinterpret_cast<const char*>(p);
+  for (std::size_t o = 0; o < sizeof(T); o += 64) __builtin_prefetch(c + o, 1);
+  __builtin_prefetch(c + sizeof(T) - 1, 1);
+}
+
+void robot_dynamics_batch(const WorldModel& m, WorldData& d, int env0, unsigned new_action_mask, const batch::Models& models) {
+  batch::Lane lanes[batch::kLanes];
+  for (int l = 0; l < batch::kLanes; ++l) {
+    const std::size_t i = m.index(env0 + l, 0);
+    real* applied = &d.applied_actions[i * kMaxActionDim];
+    if ((new_action_mask >> l) & 1u) std::memcpy(applied, &d.actions[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
+    lanes[l].state = &d.state[i];
+    lanes[l].ctrl = &d.mr_state[i].ctrl;
+    lanes[l].alloc = &d.mr_state[i].allocator;
+    lanes[l].motors = &d.mr_state[i].motors;
+    lanes[l].action = applied;
+    lanes[l].contact_force_w = &d.contact_force_w[i];
+    lanes[l].contact_torque_b = &d.contact_torque_b[i];
+  }
+  batch::robot_step(models, lanes);
+}
+}  // namespace
+
+bool batch_eligible(const WorldModel& m) {
+  // One robot per environment (lanes are environments); the observation noise and the random
+  // disturbance draw from the environment's stream inside the robot step, which the twin leaves
+  // to the scalar path.
+  return m.robots_per_env == 1 && !m.cfg.env.perturb_observations && !m.cfg.env.enable_disturbance &&
+         batch::chain_eligible(m.mr) && batch::eligible(batch::models_of(m.mr, m.body, m.cfg.sim.dt_s, m.cfg.sim.substeps));
+}
+
+int env_steps_batched(const WorldModel& m, WorldData& d, int begin, int end) {
+  constexpr int kL = batch::kLanes;
+  constexpr int kAhead = 2 * kL;  // prefetch distance: two groups (~a microsecond of work)
+  const batch::Models models = batch::models_of(m.mr, m.body, m.cfg.sim.dt_s, m.cfg.sim.substeps);
+  int env = begin;
+  for (; env + kL <= end; env += kL) {
+    for (int l = 0; l < kL && env + kAhead + l < end; ++l) {
+      const std::size_t i = m.index(env + kAhead + l, 0);
+      prefetch(&d.mr_state[i].motors);
+      prefetch(&d.mr_state[i].ctrl.lee);
+      prefetch(&d.mr_state[i].allocator);
+      prefetch(&d.state[i]);
+    }
+    // Lockstep needs the same number of physics steps in every lane (always, unless
+    // num_physics_steps_per_env_step_std > 0); the latency may differ per lane.
+    const int n = d.phys_steps[env];
+    bool same = true;
+    for (int l = 1; l < kL; ++l) same = same && d.phys_steps[env + l] == n;
+    if (!same) {
+      for (int l = 0; l < kL; ++l) env_step(m, d, env + l);
+      continue;
+    }
+    for (int l = 0; l < kL; ++l) env_step_begin(m, d, env + l);
+    for (int s = 0; s < n; ++s) {
+      unsigned new_action = 0;
+      Vec3 v0[kL];
+      for (int l = 0; l < kL; ++l) {
+        if (s == d.latency[env + l]) new_action |= 1u << l;
+        v0[l] = d.state[m.index(env + l, 0)].linvel_w;
+      }
+      robot_dynamics_batch(m, d, env, new_action, models);
+      for (int l = 0; l < kL; ++l) {
+        if (m.any_imu) update_imus(m, d, env + l, 0, v0[l]);
+        physics_step_tail(m, d, env + l);
+      }
+    }
+    for (int l = 0; l < kL; ++l) env_step_end(m, d, env + l);
+  }
+  return env;
+}
+
+}  // namespace kestrel::sim::stage
