@@ -60,6 +60,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
+#include "scene/episode_draw.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -625,11 +626,6 @@ class PlanarSimulator final : public Simulator {
   }
 
   // ---- reset -------------------------------------------------------------------------------
-  static Vec3 uniform_vec(RngStream& rng, const Vec3& lo, const Vec3& hi) {
-    Vec3 v;
-    for (int i = 0; i < 3; ++i) v[i] = lo[i] < hi[i] ? rng.uniform(lo[i], hi[i]) : lo[i];
-    return v;
-  }
 
   void set_slot(Slot& s, real x, real y, real yaw, real radius, real hx, real hy) {
     s.x = x;
@@ -664,15 +660,13 @@ class PlanarSimulator final : public Simulator {
         set_slot(ev.slots[slot++], mx, hi[1] + t, 0, 0, span[0] / 2 + t, t);
         continue;
       }
-      const int count = c.keep_in_env ? c.num_assets
-                                      : c.min_num_assets + static_cast<int>(std::floor(
-                                            level * static_cast<real>(c.num_assets - c.min_num_assets) + 0.5_r));
+      const int count = scene::asset_count(c, level);
       const std::size_t first = slot;
       for (int k = 0; k < c.num_assets; ++k) {
         // Always the same draws per asset (used or not), so the stream does not depend on the level.
-        const Vec3 ratio = uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
-        const Vec3 eul = uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
-        const Vec3 size = uniform_vec(rng, c.min_size_m, c.max_size_m);
+        const Vec3 ratio = scene::uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
+        const Vec3 eul = scene::uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
+        const Vec3 size = scene::uniform_vec(rng, c.min_size_m, c.max_size_m);
         Slot& s = ev.slots[first + static_cast<std::size_t>(k)];
         if (k >= count) continue;
         const real x = lo[0] + ratio[0] * span[0], y = lo[1] + ratio[1] * span[1];
@@ -768,40 +762,22 @@ class PlanarSimulator final : public Simulator {
     Env& ev = envs_[static_cast<std::size_t>(ei)];
     RngStream& rng = ev.rng_reset;
     const EnvConfig& e = cfg_.env;
-    ev.lower = uniform_vec(rng, e.lower_bound_min_m, e.lower_bound_max_m);
-    ev.upper = uniform_vec(rng, e.upper_bound_min_m, e.upper_bound_max_m);
-    if (ev.layout_generation == 0 || ++ev.episodes_since_layout >= e.keep_same_env_for_num_episodes) {
+    scene::draw_bounds(e, rng, ev.lower, ev.upper);
+    if (scene::layout_due(e, ev.layout_generation, ev.episodes_since_layout)) {
       generate_layout(ev);
-      ev.episodes_since_layout = 0;
-      ++ev.layout_generation;
+      scene::layout_drawn(ev.layout_generation, ev.episodes_since_layout);
     }
     ev.episode_step = 0;
-    const Vec3 lo = ev.lower, span = ev.upper - ev.lower;
-    const bool hover_task = cfg_.task.kind == TaskKind::hover;
     for (int r = 0; r < robots_per_env_; ++r) {
       const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
-      const int attempts = cfg_.task.placement_attempts;
-      Vec3 starts[kMaxPlacementAttempts], targets[kMaxPlacementAttempts];
-      for (int k = 0; k < attempts; ++k) {
-        starts[k] = lo + uniform_vec(rng, cfg_.robot.min_init_position_ratio, cfg_.robot.max_init_position_ratio).cwiseProduct(span);
-        targets[k] = lo + uniform_vec(rng, cfg_.task.min_target_ratio, cfg_.task.max_target_ratio).cwiseProduct(span);
-      }
-      int chosen = -1, clear_start = -1;
-      for (int k = 0; k < attempts && chosen < 0; ++k) {
-        if (!clear_point(ev, starts[k][0], starts[k][1])) continue;
-        if (clear_start < 0) clear_start = k;
-        if (hover_task || (clear_point(ev, targets[k][0], targets[k][1]) &&
-                           (!cfg_.task.line_of_sight || clear_segment(ev, starts[k][0], starts[k][1], targets[k][0], targets[k][1]))))
-          chosen = k;
-      }
-      const bool fallback = chosen < 0;
-      if (fallback) {
-        chosen = clear_start >= 0 ? clear_start : 0;
-        ++ev.stats.placement_fallbacks;
-      }
+      // Clearance in the plane: x and y of each candidate against the used slots.
+      const scene::Placement place = scene::place_robot(
+          cfg_, ev.lower, ev.upper, rng, [&](const Vec3& p) { return clear_point(ev, p[0], p[1]); },
+          [&](const Vec3& a, const Vec3& b) { return clear_segment(ev, a[0], a[1], b[0], b[1]); });
+      if (place.fallback) ++ev.stats.placement_fallbacks;
       const real yaw = rng.uniform(-cfg_.robot.max_init_yaw_rad, cfg_.robot.max_init_yaw_rad);
-      const Vec3 start = starts[chosen];
-      const Vec3 target = (hover_task || fallback) ? start : targets[chosen];
+      const Vec3& start = place.start_w;
+      const Vec3& target = place.target_w;
       target_w_[3 * i] = target[0];
       target_w_[3 * i + 1] = target[1];
       target_w_[3 * i + 2] = plane_z_;

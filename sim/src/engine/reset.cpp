@@ -6,11 +6,12 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/world_stages.hpp"
-#include "world_internal.hpp"
+#include "../scene/episode_draw.hpp"
 
 namespace kestrel::sim::stage {
 
 namespace al = kestrel::allocation;
+using scene::uniform_vec;
 
 namespace {
 bool overlaps_obstacle(const WorldModel& m, const WorldData& d, int env, const Shape& s) {
@@ -68,9 +69,7 @@ void generate_layout(const WorldModel& m, WorldData& d, int env, RngStream& rng)
       emit(s);
       continue;
     }
-    const int count = c.keep_in_env ? c.num_assets
-                                    : c.min_num_assets + static_cast<int>(std::floor(
-                                          level * static_cast<real>(c.num_assets - c.min_num_assets) + 0.5_r));
+    const int count = scene::asset_count(c, level);
     for (int k = 0; k < count; ++k) {
       const Vec3 ratio = uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
       const Vec3 e = uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
@@ -194,12 +193,10 @@ bool clear_segment(const WorldModel& m, const WorldData& d, int env, const Vec3&
 void reset_env(const WorldModel& m, WorldData& d, int env) {
   RngStream& rng = d.rng_reset[env];
   const EnvConfig& e = m.cfg.env;
-  d.lower_w[env] = uniform_vec(rng, e.lower_bound_min_m, e.lower_bound_max_m);
-  d.upper_w[env] = uniform_vec(rng, e.upper_bound_min_m, e.upper_bound_max_m);
-  if (d.layout_generation[env] == 0 || ++d.episodes_since_layout[env] >= e.keep_same_env_for_num_episodes) {
+  scene::draw_bounds(e, rng, d.lower_w[env], d.upper_w[env]);
+  if (scene::layout_due(e, d.layout_generation[env], d.episodes_since_layout[env])) {
     generate_layout(m, d, env, rng);
-    d.episodes_since_layout[env] = 0;
-    ++d.layout_generation[env];
+    scene::layout_drawn(d.layout_generation[env], d.episodes_since_layout[env]);
   }
   const int ps = static_cast<int>(std::floor(
       e.num_physics_steps_per_env_step_mean + e.num_physics_steps_per_env_step_std * rng.normal() + 0.5_r));
@@ -208,36 +205,15 @@ void reset_env(const WorldModel& m, WorldData& d, int env) {
                       ? std::min(d.phys_steps[env], static_cast<int>(rng.next_u32() % static_cast<std::uint32_t>(e.max_latency_physics_steps + 1)))
                       : 0;
   d.episode_step[env] = 0;
-  const Vec3 lo = d.lower_w[env], span = d.upper_w[env] - d.lower_w[env];
+  const bool hover_task = m.cfg.task.kind == TaskKind::hover;
   for (int r = 0; r < m.robots_per_env; ++r) {
     const std::size_t i = m.index(env, r);
+    const scene::Placement place = scene::place_robot(
+        m.cfg, d.lower_w[env], d.upper_w[env], rng, [&](const Vec3& p) { return clear_point(m, d, env, p); },
+        [&](const Vec3& a, const Vec3& b) { return clear_segment(m, d, env, a, b); });
+    if (place.fallback) ++d.stats[env].placement_fallbacks;  // hovers at a clear start rather than fly into an obstacle
     RigidBodyState st;
-    // Start and target (TaskConfig::placement_attempts): all candidates are drawn first, always
-    // the same number, so the stream position after a reset does not depend on the layout; then
-    // the first candidate pair whose start and target clear the obstacles (and, with
-    // line_of_sight, the straight path between them) is kept. Fallbacks: the first pair with a
-    // clear start, else the first pair (a layout with no free space still resets).
-    const int attempts = m.cfg.task.placement_attempts;
-    Vec3 starts[kMaxPlacementAttempts], targets[kMaxPlacementAttempts];
-    for (int k = 0; k < attempts; ++k) {
-      starts[k] = lo + uniform_vec(rng, m.cfg.robot.min_init_position_ratio, m.cfg.robot.max_init_position_ratio).cwiseProduct(span);
-      targets[k] = lo + uniform_vec(rng, m.cfg.task.min_target_ratio, m.cfg.task.max_target_ratio).cwiseProduct(span);
-    }
-    const bool hover_task = m.cfg.task.kind == TaskKind::hover;
-    int chosen = -1, clear_start = -1;
-    for (int k = 0; k < attempts && chosen < 0; ++k) {
-      if (!clear_point(m, d, env, starts[k])) continue;
-      if (clear_start < 0) clear_start = k;
-      if (hover_task || (clear_point(m, d, env, targets[k]) && (!m.cfg.task.line_of_sight || clear_segment(m, d, env, starts[k], targets[k]))))
-        chosen = k;
-    }
-    // No clear pair: hover at the first clear start rather than fly into an obstacle.
-    const bool fallback = chosen < 0;
-    if (fallback) {
-      chosen = clear_start >= 0 ? clear_start : 0;
-      ++d.stats[env].placement_fallbacks;
-    }
-    st.position_w = starts[chosen];
+    st.position_w = place.start_w;
     const real yaw = rng.uniform(-m.cfg.robot.max_init_yaw_rad, m.cfg.robot.max_init_yaw_rad);
     st.orientation_wb = quat_from_euler_xyz(0, 0, yaw);
     d.state[i] = st;
@@ -247,7 +223,7 @@ void reset_env(const WorldModel& m, WorldData& d, int env) {
     // One stream for the gain and the motor draws, in that order (the World's order since the start).
     if (robots::multirotor_reset(m.mr, d.mr_state[i], &rng, rng, hover) != Status::ok) ++d.status_count[static_cast<std::size_t>(env)];
     // Task: the position setpoint (or the start point for hover) is the action of the episode.
-    d.target_w[i] = (hover_task || fallback) ? st.position_w : targets[chosen];
+    d.target_w[i] = place.target_w;
     real* a = &d.actions[i * kMaxActionDim];
     std::fill(a, a + kMaxActionDim, 0_r);
     const bool moving = m.cfg.task.setpoint_speed_m_s > 0 && !hover_task;

@@ -16,9 +16,11 @@
 #include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/world_stages.hpp"
-#include "world_internal.hpp"
+#include "../scene/episode_draw.hpp"
 
 namespace kestrel::sim::stage {
+
+using scene::uniform_vec;
 
 void sort_sweep_order(Obstacle* o, int n) {
   // Insertion sort: stable, so equal keys keep generation order; O(n) for the nearly sorted list
