@@ -21,24 +21,12 @@
 #include "kestrel/sensors/scene.hpp"
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/config.hpp"
+#include "kestrel/sim/layout.hpp"
 #include "kestrel/sim/summary.hpp"
 
 namespace kestrel::sim {
 
 struct WorldModel;
-
-/// One obstacle slot. Obstacles of an environment are kept sorted by aabb_min_w.x (the sweep
-/// order of the broad phase); a moving obstacle may change its index after a step.
-struct Obstacle {
-  Shape shape;
-  Vec3 linvel_w = Vec3::Zero();   // dynamic environment: set per reset or by set_obstacle_velocity
-  Vec3 angvel_w = Vec3::Zero();   // dynamic environment: world-frame angular velocity, set per reset
-  Vec3 aabb_min_w = Vec3::Zero();
-  Vec3 aabb_max_w = Vec3::Zero();
-  std::int16_t semantic_id = 0;
-  AssetKind kind = AssetKind::cube;
-  std::uint8_t class_index = 0;
-};
 
 /// One sensor's per-robot outputs (the model's SensorModel holds its constant part).
 struct SensorData {
