@@ -25,7 +25,8 @@
 //    collective thrust T leaves after holding the weight, sqrt(T^2 - (m g)^2); the yaw torque is
 //    the realised motor torque. Roll/pitch dynamics and altitude changes are not modelled.
 //
-// Obstacles: the env config's asset classes as circles (thin poles, rods, trees' trunks, spheres)
+// Obstacles: the shared layout (sim/layout.hpp) of the env config's asset classes, its upright
+// obstacles as circles (thin poles, rods, trees' trunks, spheres)
 // and yaw-rotated boxes (cubes, panels, small walls, bounding walls), one static body per slot,
 // created at set-up; a reset edits the slots' shapes in place, moves them and enables the used
 // ones, so no Box2D object is created inside a step. Roll and pitch ranges of 3-D asset classes
@@ -60,6 +61,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
+#include "kestrel/sim/layout.hpp"
 #include "scene/episode_draw.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
@@ -189,6 +191,7 @@ struct Env {
   ContactForces contacts;
   std::vector<b2Body*> robots;
   std::vector<Slot> slots;
+  std::vector<int> next_slot;  // per asset class: its next free slot while a layout is mapped
   RngStream rng_reset, rng_step;
   Vec3 lower = Vec3::Zero(), upper = Vec3::Zero();
   int episode_step = 0, episodes_since_layout = 0;
@@ -599,11 +602,15 @@ class PlanarSimulator final : public Simulator {
       b->CreateFixture(&fd);
       ev.robots.push_back(b);
     }
-    // Obstacle slots: one static body per slot of each asset class, disabled until used.
+    // Obstacle slots: one static body per upright obstacle a class's layout can hold (the four side
+    // walls; a tree's trunk), disabled until used.
+    ev.next_slot.assign(cfg_.env.assets.size(), 0);
+    class_first_slot_.assign(cfg_.env.assets.size(), 0);
     for (std::size_t ci = 0; ci < cfg_.env.assets.size(); ++ci) {
       const AssetClass& a = cfg_.env.assets[ci];
       const bool is_box = a.kind == AssetKind::cube || a.kind == AssetKind::panel || a.kind == AssetKind::small_wall || a.kind == AssetKind::wall;
       const int n = a.kind == AssetKind::wall ? 4 : a.num_assets;
+      class_first_slot_[ci] = static_cast<int>(ev.slots.size());
       for (int k = 0; k < n; ++k) {
         b2BodyDef bd;
         bd.type = b2_staticBody;
@@ -644,41 +651,30 @@ class PlanarSimulator final : public Simulator {
     if (!s.body->IsEnabled()) s.body->SetEnabled(true);
   }
 
+  /// The shared layout (sim/layout.hpp) in the plane: each upright obstacle becomes its class's
+  /// next slot, a box as its yaw-rotated footprint, a sphere, capsule or cylinder as a circle of
+  /// its radius (the plane cuts their vertical extrusion); tree branches and the walls' ceiling
+  /// have no footprint and are left out.
   void generate_layout(Env& ev) {
-    RngStream& rng = ev.rng_reset;
     for (Slot& s : ev.slots) s.used = false;
-    const Vec3 lo = ev.lower, hi = ev.upper, span = hi - lo;
-    std::size_t slot = 0;
-    const real level = cfg_.env.curriculum_level;
-    for (std::size_t ci = 0; ci < cfg_.env.assets.size(); ++ci) {
-      const AssetClass& c = cfg_.env.assets[ci];
-      if (c.kind == AssetKind::wall) {
-        const real t = 0.05_r, mx = (lo[0] + hi[0]) / 2, my = (lo[1] + hi[1]) / 2;
-        set_slot(ev.slots[slot++], lo[0] - t, my, 0, 0, t, span[1] / 2 + t);
-        set_slot(ev.slots[slot++], hi[0] + t, my, 0, 0, t, span[1] / 2 + t);
-        set_slot(ev.slots[slot++], mx, lo[1] - t, 0, 0, span[0] / 2 + t, t);
-        set_slot(ev.slots[slot++], mx, hi[1] + t, 0, 0, span[0] / 2 + t, t);
-        continue;
-      }
-      const int count = scene::asset_count(c, level);
-      const std::size_t first = slot;
-      for (int k = 0; k < c.num_assets; ++k) {
-        // Always the same draws per asset (used or not), so the stream does not depend on the level.
-        const Vec3 ratio = scene::uniform_vec(rng, c.min_position_ratio, c.max_position_ratio);
-        const Vec3 eul = scene::uniform_vec(rng, c.min_euler_rad, c.max_euler_rad);
-        const Vec3 size = scene::uniform_vec(rng, c.min_size_m, c.max_size_m);
-        Slot& s = ev.slots[first + static_cast<std::size_t>(k)];
-        if (k >= count) continue;
-        const real x = lo[0] + ratio[0] * span[0], y = lo[1] + ratio[1] * span[1];
-        switch (c.kind) {
-          case AssetKind::cube: set_slot(s, x, y, eul[2], 0, size[0] / 2, size[0] / 2); break;
-          case AssetKind::panel: set_slot(s, x, y, eul[2], 0, 0.025_r, size[1] / 2); break;
-          case AssetKind::small_wall: set_slot(s, x, y, eul[2], 0, 0.05_r, size[1] / 2); break;
-          default: set_slot(s, x, y, 0, size[0], 0, 0); break;  // circles: poles, rods, trunks, spheres
+    for (std::size_t ci = 0; ci < ev.next_slot.size(); ++ci) ev.next_slot[ci] = class_first_slot_[ci];
+    struct Fill {
+      PlanarSimulator* self;
+      Env* ev;
+      static void put(void* context, const Obstacle& o) {
+        Fill& f = *static_cast<Fill*>(context);
+        if (!o.upright) return;
+        Slot& s = f.ev->slots[static_cast<std::size_t>(f.ev->next_slot[o.class_index]++)];
+        const Shape& sh = o.shape;
+        if (s.shape == SlotShape::box) {
+          const Vec3 ex = rotate(sh.orientation_wb, Vec3::UnitX());
+          f.self->set_slot(s, sh.position_w[0], sh.position_w[1], std::atan2(ex[1], ex[0]), 0, sh.half_extents_m[0], sh.half_extents_m[1]);
+        } else {
+          f.self->set_slot(s, sh.position_w[0], sh.position_w[1], 0, sh.radius_m, 0, 0);
         }
       }
-      slot = first + static_cast<std::size_t>(c.num_assets);
-    }
+    } fill{this, &ev};
+    (void)sim::generate_layout(cfg_, cfg_.env.curriculum_level, ev.lower, ev.upper, ev.rng_reset, nullptr, &Fill::put, &fill);
     for (Slot& s : ev.slots)
       if (!s.used && s.body->IsEnabled()) s.body->SetEnabled(false);
   }
@@ -1017,6 +1013,7 @@ class PlanarSimulator final : public Simulator {
   VelocitySteeringParams vs_;
   robots::MultirotorModel mr_;  // the multirotor's chain (robots/multirotor.hpp), compiled as on rigid
   real half_x_ = 0, half_y_ = 0, radius_ = 0, bound_r_ = 0, plane_z_ = 0;
+  std::vector<int> class_first_slot_;  // per asset class: its first slot in Env::slots
   std::vector<VelocitySteeringState> steer_;
   std::vector<robots::MultirotorState> mr_state_;
   std::vector<real> force_xy_, normal_sum_, prev_omega_;
