@@ -17,7 +17,7 @@ static_assert(policy::generated::kPositionPolicyType::obs_dim == policy::kPositi
               "the exported policy must read the position-setpoint observation");
 static_assert(policy::generated::kPositionPolicyType::action_dim == 4, "Lee velocity takes 4 values");
 
-constexpr real kTaskActionClip = 10;  // position_setpoint_task clips actions to +-10 (sim/src/task.cpp)
+constexpr real kTaskActionClip = 10;  // position_setpoint_task clips actions to +-10 (sim/src/tasks/task.cpp)
 // (The exported network already maps its tanh output to +-2 m/s and +-1 rad/s, the env's action_scale.)
 constexpr real kSuccessRadius_m = 0.3_r;  // the task's success radius
 

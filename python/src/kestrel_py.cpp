@@ -190,7 +190,7 @@ nb::ndarray<nb::numpy, T, nb::ndim<2>, nb::c_contig> view2(const T* p, std::size
 }
 
 // ---- Box2D allocation hooks ---------------------------------------------------------------------------
-// sim/src/planar.cpp defines b2Alloc_Default / b2Free_Default; every block it hands out from the heap
+// sim/src/backends/planar.cpp defines b2Alloc_Default / b2Free_Default; every block it hands out from the heap
 // is preceded by a 16-byte header whose first word is "MALC". b2BlockAllocator::Allocate is compiled
 // in libbox2d.so and, for a size above b2_maxBlockSize, calls b2Alloc -> b2Alloc_Default through
 // libbox2d's PLT: if the tag is there, the extension module's definitions took effect.
@@ -238,7 +238,7 @@ NB_MODULE(_core, m) {
   m.def("rl_task_ids", &ks::rl_task_ids, "Every task id make_task accepts (sorted).");
   m.def("default_scenario_yaml", []() { return std::string(ks::default_scenario_yaml()); });
   m.def("box2d_hooks_active", &box2d_hooks_active,
-        "True if sim/src/planar.cpp's b2Alloc_Default/b2Free_Default interpose on libbox2d's inside this module.");
+        "True if sim/src/backends/planar.cpp's b2Alloc_Default/b2Free_Default interpose on libbox2d's inside this module.");
 
   nb::class_<KConfig>(m, "Config", "A parsed scenario (sim/config.hpp WorldConfig); a few fields can be changed before make_task.")
       .def_prop_rw(

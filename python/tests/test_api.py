@@ -83,7 +83,7 @@ def test_simulator_views(root):
 
 
 def test_box2d_allocation_hooks_take_effect_in_the_module():
-    # sim/src/planar.cpp's b2Alloc_Default / b2Free_Default interpose on libbox2d.so's inside the
+    # sim/src/backends/planar.cpp's b2Alloc_Default / b2Free_Default interpose on libbox2d.so's inside the
     # extension module too (it exports them; libbox2d's PLT finds the module first in its scope).
     assert kestrel.box2d_hooks_active()
     sim = kestrel.make_simulator({"simulator": "planar", "env": {"name": "planar_obstacles", "num_envs": 8}}, threads=2)

@@ -1,5 +1,5 @@
 // Heap use inside the planar (Box2D) step (Box2D's own allocations go to per-environment arenas
-// inside a step: see sim/src/planar.cpp). Box2D lives in a shared library (libbox2d.so), whose
+// inside a step: see sim/src/backends/planar.cpp). Box2D lives in a shared library (libbox2d.so), whose
 // calls to malloc the linker's --wrap cannot see; this executable defines malloc & co. itself,
 // which interposes on every caller in the process (libbox2d.so and libstdc++ included), and
 // counts calls on all threads with one atomic counter. The real allocator is glibc's __libc_*.

@@ -1,5 +1,5 @@
 // Observation builders shared by training and firmware: a trained policy must see the same
-// inputs, computed by the same code, on the MCU as in the simulator (sim/src/task.cpp builds its
+// inputs, computed by the same code, on the MCU as in the simulator (sim/src/tasks/task.cpp builds its
 // observations with these; the firmware builds them from its state estimate).
 #pragma once
 

@@ -19,7 +19,7 @@
 // Covered configuration (eligible()): lee_position controller, sequential desaturation with a
 // 4-rotor allocation model, 4 motors with RK4 and the discrete approximation (thrust or rotor-speed
 // state), semi-implicit Euler (any number of substeps), float build (the quaternion product order
-// is Eigen's SSE path). World (world_batch.cpp) also needs one robot per environment, no
+// is Eigen's SSE path). World (sim/src/engine/step_batched.cpp) also needs one robot per environment, no
 // observation noise and no random disturbance. Anything else runs the scalar path unchanged.
 #pragma once
 

@@ -56,7 +56,7 @@ struct AssetClass {
   Vec3 max_position_ratio = Vec3(0.9_r, 0.9_r, 0.9_r);
   Vec3 min_euler_rad = Vec3::Zero();  // orientation drawn uniformly in [min, max] (Euler XYZ)
   Vec3 max_euler_rad = Vec3::Zero();
-  Vec3 min_size_m = Vec3(0.3_r, 0.3_r, 0.3_r);  // kind-specific (see world.cpp make_asset)
+  Vec3 min_size_m = Vec3(0.3_r, 0.3_r, 0.3_r);  // kind-specific (see sim/src/scene/layout.cpp)
   Vec3 max_size_m = Vec3(0.6_r, 0.6_r, 0.6_r);
   bool keep_in_env = false;      // true: the curriculum never removes it
   int semantic_id = 1;

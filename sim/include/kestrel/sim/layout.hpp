@@ -2,7 +2,7 @@
 // World and the planar backend each had their own generator, and they had drifted: the planar
 // one drew every asset whatever the curriculum level and had no tree branches). The rigid World
 // keeps the layout's 3-D shapes as they are; the planar backend keeps the footprints of the
-// upright ones (sim/src/planar.cpp).
+// upright ones (sim/src/backends/planar.cpp).
 #pragma once
 
 #include <cstdint>

@@ -6,7 +6,7 @@
 // adapted to flat float arrays and to Kestrel's robots:
 //   - rigid:  the 3-D batched World (sim/world.hpp: Newton-Euler bodies, libccd/analytic collision
 //             with penalty contact), every robot, environment and sensor it supports;
-//   - planar: Box2D 2.4 (sim/src/planar.cpp), one b2World per environment, for robots that move in a
+//   - planar: Box2D 2.4 (sim/src/backends/planar.cpp), one b2World per environment, for robots that move in a
 //             plane: a car-like ground vehicle on the velocity + steering-angle controller
 //             (kinematic bicycle model) or a multirotor held at a fixed altitude; circles and boxes
 //             as obstacles; a 2-D lidar through b2World::RayCast.
@@ -32,7 +32,7 @@
 // Determinism: per-environment streams RngStream(seed, env, purpose); environments never read each
 // other, so results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes it).
 // No heap inside step/post_physics_step/push_robots/reset_idx after set-up (planar: after Box2D's
-// block allocator and broad-phase buffers have warmed up; see planar.cpp and the heap test).
+// block allocator and broad-phase buffers have warmed up; see sim/src/backends/planar.cpp and the heap test).
 #pragma once
 
 #include <cstddef>
@@ -191,7 +191,7 @@ class Simulator {
   [[nodiscard]] bool set_obstacle_box(int env, const ObstacleBox& box) { return set_obstacle_boxes(env, &box, 1); }
 
   /// In-step allocations that found their environment's fixed arena full and went to the heap
-  /// (planar: Box2D's growth; see planar.cpp). 0 on rigid, which never allocates in a step.
+  /// (planar: Box2D's growth; see sim/src/backends/planar.cpp). 0 on rigid, which never allocates in a step.
   virtual std::uint64_t step_heap_fallbacks() const { return 0; }
 
   virtual WorldSummary summary() const = 0;
@@ -260,7 +260,7 @@ std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, Backend bac
 /// to zero at the target. Writes num_robots x action_dim values; no heap.
 void scripted_setpoint_actions(const Simulator& sim, real* actions);
 
-/// `kestrel run` through this interface (sim/src/simulator_run.cpp): `steps` env-steps of
+/// `kestrel run` through this interface (sim/src/runtime/run_scripted.cpp): `steps` env-steps of
 /// scripted_setpoint_actions, a summary, DIR/trajectory.csv and the state hash. Returns the exit code.
 int run_scripted(Simulator& sim, const std::string& label, long long steps, const std::string& out_dir, bool quiet);
 

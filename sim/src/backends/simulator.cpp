@@ -1,5 +1,5 @@
 // The Simulator interface: backend selection, shared views, push_robots, the scripted setpoint
-// policy and the registry entries. The backends live in simulator_rigid.cpp and planar.cpp.
+// policy and the registry entries. The backends live in rigid.cpp and planar.cpp (this folder).
 #include "kestrel/sim/simulator.hpp"
 
 #include <cmath>

@@ -62,7 +62,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/layout.hpp"
-#include "scene/episode_draw.hpp"
+#include "../scene/episode_draw.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"

@@ -105,7 +105,7 @@ void register_sensors(Registry<SensorConfig>& s) {
 
 void register_builtins(Registries& r) {
   register_sensors(r.sensors);
-  register_simulators(r);  // rigid, planar and the planar presets (sim/src/simulator.cpp)
+  register_simulators(r);  // rigid, planar and the planar presets (sim/src/backends/simulator.cpp)
   r.sims.add("base_sim", "dt 0.01 s, 1 substep, gravity (0, 0, -9.81)", [] { return SimParams(); });
   r.sims.add("fast_sim", "dt 0.005 s, 1 substep", [] {
     SimParams s;
