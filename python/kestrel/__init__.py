@@ -9,6 +9,10 @@ and rsl_rl.
     env = kestrel.make_vec("Kestrel-PositionSetpoint-v0", num_envs=1024, seed=0)
     obs, info = env.reset(seed=0)
     obs, rew, term, trunc, info = env.step(env.action_space.sample())
+    sim = kestrel.make_simulator({"env": "empty", "sensors": ["vl53l5cx"]}, num_envs=8)
+    depth = sim.range_images(0)                      # (8, 8, 8) read-only view of the ToF images
+
+From the shell: `kestrel train TASK --learner rsl_rl --envs N --seed S --out DIR` (kestrel.cli).
 """
 
 from __future__ import annotations

@@ -7,7 +7,12 @@ or ReLU), an output layer (the Gaussian's mean: the deterministic action), then
 built from a Stable-Baselines3 PPO model (with its VecNormalize) or an rsl_rl runner.
 
 ``write_header`` writes a C++ header with every number as a hex-float literal (exact: the header
-reproduces the float32 weights bit for bit), for firmware to keep in flash.
+reproduces the float32 weights bit for bit), for firmware to keep in flash. ``export_onnx`` writes
+the same function as an ONNX graph (``obs`` -> ``action``, dynamic batch); ``onnx_forward`` runs it
+with onnx's reference evaluator.
+
+    kestrel export --rsl-rl runs/ps/checkpoints/rsl_rl_1720320.pt --squash tanh --action-scale 2,2,2,1 \\
+        --low -1 --high 1 --no-obs-normalizer --header policy.hpp --onnx policy.onnx
 """
 from __future__ import annotations
 
@@ -217,22 +222,45 @@ inline constexpr {name}Type {name} = {{
     return path
 
 
-def export_onnx(spec: MlpSpec, path: str) -> str:
-    """The same function as an ONNX graph (torch's exporter; needs the `onnx` package)."""
+def export_onnx(spec: MlpSpec, path: str, opset: int | None = None, dynamo: bool = False) -> str:
+    """The same function as ``spec`` (normalisation, MLP, squash, clip, scale) as an ONNX graph:
+    input ``obs`` float32 (batch, obs_dim), output ``action`` float32 (batch, action_dim), batch
+    dimension dynamic. Written by torch.onnx.export from :meth:`MlpSpec.torch_module`; needs the
+    ``onnx`` package (pinned in python/requirements.txt). ``dynamo=False`` (default) uses torch's
+    TorchScript exporter: ~0.5 s, no packages beyond onnx (torch 2.13 warns that it is deprecated;
+    the warning is silenced here). ``dynamo=True`` uses torch.export (needs onnxscript, ~10 s);
+    both give the same operators (Sub, Mul, Clip, Gemm, Elu/Tanh/Relu, Max, Min, Add)."""
+    import warnings
+
     import torch
 
     module = spec.torch_module()
     dummy = torch.zeros(1, spec.obs_dim, dtype=torch.float32)
-    torch.onnx.export(module, (dummy,), path, input_names=["obs"], output_names=["action"],
-                      dynamic_axes={"obs": {0: "batch"}, "action": {0: "batch"}}, dynamo=False)
+    kw = {} if opset is None else {"opset_version": int(opset)}
+    if dynamo:
+        torch.onnx.export(module, (dummy,), path, input_names=["obs"], output_names=["action"],
+                          dynamic_shapes={"obs": {0: torch.export.Dim("batch")}}, dynamo=True, **kw)
+        return path
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*legacy TorchScript-based ONNX export.*")
+        warnings.filterwarnings("ignore", message=".*feature will be removed.*")
+        torch.onnx.export(module, (dummy,), path, input_names=["obs"], output_names=["action"],
+                          dynamic_axes={"obs": {0: "batch"}, "action": {0: "batch"}}, dynamo=False, **kw)
     return path
 
 
-def main(argv=None) -> int:
-    """python -m kestrel.export (--rsl-rl CKPT | --sb3 MODEL.zip [--vecnormalize PKL]) --header OUT.hpp"""
+def onnx_forward(path: str, obs: np.ndarray) -> np.ndarray:
+    """Runs an exported graph with onnx's own reference evaluator (numpy; no onnxruntime needed)."""
+    from onnx.reference import ReferenceEvaluator
+
+    return ReferenceEvaluator(path).run(None, {"obs": np.ascontiguousarray(obs, dtype=np.float32)})[0]
+
+
+def main(argv=None, prog: str = "python -m kestrel.export") -> int:
+    """kestrel export (--rsl-rl CKPT | --sb3 MODEL.zip [--vecnormalize PKL]) [--header OUT.hpp] [--onnx OUT.onnx]"""
     import argparse
 
-    p = argparse.ArgumentParser(prog="python -m kestrel.export", description=main.__doc__)
+    p = argparse.ArgumentParser(prog=prog, description=main.__doc__)
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--rsl-rl", help="rsl-rl-lib checkpoint (.pt with actor_state_dict)")
     src.add_argument("--sb3", help="Stable-Baselines3 model (.zip)")
@@ -243,10 +271,12 @@ def main(argv=None) -> int:
     p.add_argument("--squash", default="none", choices=sorted(SQUASH), help="rsl_rl: tanh if trained with --squash")
     p.add_argument("--action-scale", help="rsl_rl: comma-separated scale after the squash (make_vec action_scale)")
     p.add_argument("--no-obs-normalizer", action="store_true", help="rsl_rl: trained without observation normalisation")
-    p.add_argument("--header", required=True, help="C++ header to write")
+    p.add_argument("--header", help="C++ header to write (firmware: policy/mlp.hpp MlpParams)")
     p.add_argument("--name", default="kPolicy", help="name of the constexpr MlpParams in the header")
     p.add_argument("--onnx", help="also write an ONNX graph here")
     a = p.parse_args(argv)
+    if not a.header and not a.onnx:
+        p.error("nothing to write: give --header OUT.hpp and/or --onnx OUT.onnx")
     if a.rsl_rl:
         import torch
 
@@ -265,9 +295,10 @@ def main(argv=None) -> int:
             with open(a.vecnormalize, "rb") as f:
                 vn = pickle.load(f)
         spec = from_sb3(model, vn)
-    write_header(spec, a.header, name=a.name)
-    print(f"{a.header}: {a.name} = MlpParams<{spec.obs_dim}, {spec.hidden[0]}, {spec.hidden[1]}, {spec.action_dim}> "
-          f"({spec.activation})")
+    if a.header:
+        write_header(spec, a.header, name=a.name)
+        print(f"{a.header}: {a.name} = MlpParams<{spec.obs_dim}, {spec.hidden[0]}, {spec.hidden[1]}, {spec.action_dim}> "
+              f"({spec.activation})")
     if a.onnx:
         export_onnx(spec, a.onnx)
         print(f"{a.onnx}: ONNX graph of the same function")

@@ -1,7 +1,9 @@
 """Train a policy on a Kestrel task with a learner from PyPI, evaluate it, log and plot.
 
-    python -m kestrel.train Kestrel-PositionSetpoint-v0 --learner rsl_rl --seed 0 --threads 1 \\
+    kestrel train Kestrel-PositionSetpoint-v0 --learner rsl_rl --seed 0 --threads 1 \\
         --out runs/ps --target-success 0.95
+
+(`kestrel train` is the package's console command, kestrel.cli; `python -m kestrel.train` is the same)
 
 (that task's defaults: _TASK_DEFAULTS below; 100 % success after 1.7 M env-steps, 14 s of training
 on 2 cores, bench/results/python/README.md)
@@ -10,11 +12,16 @@ Every --eval-every env-steps (and at the end) the deterministic policy is evalua
 --eval-episodes episodes of a separate env seeded with --eval-seed (never a training seed): one
 episode per environment, success rate (position setpoint: truncated within the task's success
 radius; other tasks: terminated without a crash is not told apart, so success = the task's own
-count), crash rate, mean return, mean episode length, final distance. Writes DIR/log.csv, DIR/curves.png (return,
-success rate, episode length over env-steps), DIR/checkpoints/*.pt and DIR/summary.json; with
---target-success the run stops at the first evaluation that reaches it. Times: `train_s` is the
-wall time spent in the learner and the simulator (evaluations excluded), `sim_s` the part of it in
-env.step.
+count), crash rate, mean return, mean episode length, final distance. Writes DIR/log.csv (one row per
+evaluation), DIR/curves.png (return, success rate, episode length over env-steps),
+DIR/checkpoints/*.pt (one per evaluation), DIR/summary.json, TensorBoard event files in DIR
+(`tensorboard --logdir DIR`; x axis env-steps: eval/* per evaluation, train/* per learner update
+from the training envs' episodes, loss/*, policy/mean_std, perf/* from rsl_rl's update; SB3 writes
+its own under DIR/sb3/) and the final policy as DIR/policy.onnx and DIR/policy.hpp (kestrel.export:
+the deterministic action the env takes, scaled; summary.json's "export" gives its agreement with
+the learner's own policy). With --target-success the run stops at the first evaluation that
+reaches it. Times: `train_s` is the wall time spent in the learner and the simulator (evaluations
+excluded), `sim_s` the part of it in env.step.
 """
 
 from __future__ import annotations
@@ -125,6 +132,7 @@ class Learner:
         torch.set_num_threads(max(1, args.torch_threads))
         self.kind = args.learner
         self.env = env
+        self.obs_norm = bool(args.obs_norm)
         if self.kind == "rsl_rl":
             import contextlib
             import io
@@ -140,6 +148,24 @@ class Learner:
             with contextlib.redirect_stdout(io.StringIO()):
                 self.runner = OnPolicyRunner(self.venv, _rsl_rl_cfg(args), log_dir=None, device="cpu")
             self.steps_per_iter = args.rollout * env.num_envs * self.venv.action_repeat
+            # rsl_rl calls logger.log(...) after every update; with log_dir=None it writes nothing
+            # (and, with a log_dir, it would open a new event file and save a model per learn()
+            # call). Its statistics go to on_update instead, into the trainer's one writer.
+            rsl_log = self.runner.logger.log
+
+            def log_update(**kw):
+                rsl_log(**kw)
+                scalars = {f"loss/{k}": float(v) for k, v in kw["loss_dict"].items()}
+                scalars["loss/learning_rate"] = float(kw["learning_rate"])
+                scalars["policy/mean_std"] = float(kw["action_std"].detach().mean())
+                dt = kw["collect_time"] + kw["learn_time"]
+                scalars["perf/collection_s"] = float(kw["collect_time"])
+                scalars["perf/learning_s"] = float(kw["learn_time"])
+                scalars["perf/env_steps_per_s"] = self.steps_per_iter / dt if dt > 0 else 0.0
+                if self.on_update is not None:
+                    self.on_update(self.steps_per_iter, scalars)
+
+            self.runner.logger.log = log_update
         elif self.kind == "sb3":
             from stable_baselines3 import PPO
             from stable_baselines3.common.vec_env import VecNormalize
@@ -151,10 +177,14 @@ class Learner:
             self.model = PPO("MlpPolicy", self.venv, n_steps=n_steps, batch_size=max(64, n_steps * env.num_envs // args.minibatches),
                              n_epochs=args.epochs, gamma=args.gamma, gae_lambda=args.lam, learning_rate=args.lr, ent_coef=args.entropy,
                              policy_kwargs={"net_arch": [64, 64], "log_std_init": float(np.log(args.init_std))},
-                             seed=args.seed, device="cpu", verbose=0)
+                             seed=args.seed, device="cpu", verbose=0,
+                             tensorboard_log=os.path.join(args.out, "sb3") if args.tensorboard else None)
             self.steps_per_iter = n_steps * env.num_envs
         else:
             raise ValueError(f"--learner: expected rsl_rl or sb3, got {self.kind!r}")
+
+    # Called after every learner update with (env-steps of that update, {tag: scalar}).
+    on_update: Callable[[int, dict], None] | None = None
 
     def train(self, env_steps: int) -> int:
         iters = max(1, env_steps // self.steps_per_iter)
@@ -166,7 +196,20 @@ class Learner:
                 self.runner.learn(iters)
             self.runner.current_learning_iteration += 1
         else:
-            self.model.learn(iters * self.steps_per_iter, reset_num_timesteps=False)
+            from stable_baselines3.common.callbacks import BaseCallback
+
+            learner = self
+
+            class OnRollout(BaseCallback):
+                def _on_step(self) -> bool:
+                    return True
+
+                def _on_rollout_end(self) -> None:
+                    if learner.on_update is not None:
+                        learner.on_update(learner.steps_per_iter, {})
+
+            self.model.learn(iters * self.steps_per_iter, reset_num_timesteps=False, callback=OnRollout(),
+                             tb_log_name="PPO")
         return iters * self.steps_per_iter
 
     def policy(self) -> Callable[[np.ndarray], np.ndarray]:
@@ -195,6 +238,22 @@ class Learner:
             return np.ascontiguousarray(a, dtype=np.float32)
 
         return act_sb3
+
+    def spec(self):
+        """The deterministic policy as kestrel.export's MlpSpec, in the env's action units (after
+        the env's action_scale): what the env is given for an observation."""
+        from . import export
+
+        scale = self.env.action_scale
+        if self.kind == "rsl_rl":
+            space = self.env.single_action_space
+            return export.from_rsl_rl(self.runner.alg.save()["actor_state_dict"], space.low, space.high, activation="elu",
+                                      squash="tanh" if self.squash else "none", action_scale=scale,
+                                      obs_normalizer=bool(self.obs_norm))
+        spec = export.from_sb3(self.model, self.venv)
+        if scale is not None:
+            spec.action_scale = np.asarray(scale, np.float32)
+        return spec
 
     def save(self, path: str) -> None:
         if self.kind == "rsl_rl":
@@ -264,8 +323,40 @@ _TASK_DEFAULTS: dict[str, dict] = {
 }
 
 
-def main(argv: list[str] | None = None) -> dict:
-    p = argparse.ArgumentParser(prog="python -m kestrel.train", description=__doc__.split("\n\n")[0])
+def _export(learner: Learner, args, overrides: dict) -> dict:
+    """DIR/policy.onnx and DIR/policy.hpp of the final policy, and how closely the exported
+    function (torch module, ONNX reference evaluator) reproduces the learner's own deterministic
+    policy on observations of the evaluation seed's first steps."""
+    from . import export
+
+    spec = learner.spec()
+    env = make_vec(args.task, num_envs=64, seed=args.eval_seed, threads=args.threads, **overrides)
+    obs, _ = env.reset(seed=args.eval_seed)
+    act = learner.policy()
+    scale = 1.0 if env.action_scale is None else env.action_scale
+    rows, want = [], []
+    for _ in range(4):
+        a = act(obs)
+        rows.append(np.array(obs, np.float32))
+        want.append(np.asarray(a, np.float32) * scale)
+        obs, *_ = env.step(a)
+    env.close()
+    data, want = np.concatenate(rows), np.concatenate(want)
+    onnx_path = export.export_onnx(spec, os.path.join(args.out, "policy.onnx"))
+    header = export.write_header(spec, os.path.join(args.out, "policy.hpp"), name="kPolicy")
+    import torch
+
+    with torch.no_grad():
+        got_torch = spec.torch_module()(torch.from_numpy(data)).numpy()
+    got_onnx = export.onnx_forward(onnx_path, data)
+    return {"onnx": onnx_path, "header": header, "observations": int(data.shape[0]),
+            "max_abs_diff_spec_vs_learner": float(np.abs(got_torch - want).max()),
+            "max_abs_diff_onnx_vs_spec": float(np.abs(got_onnx - got_torch).max()),
+            "vehicle_frame_obs": overrides.get("vehicle_frame_obs", False)}
+
+
+def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -> dict:
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.split("\n\n")[0])
     p.add_argument("task", nargs="?", default="Kestrel-PositionSetpoint-v0",
                    help=f"gymnasium id ({', '.join(GYM_IDS)}) or task id ({', '.join(kestrel.task_ids())})")
     p.add_argument("--learner", choices=["rsl_rl", "sb3"], default="rsl_rl")
@@ -299,6 +390,8 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--vehicle-frame-obs", choices=["auto", "on", "off"], default="auto",
                    help="position setpoint: target - position rotated into the vehicle frame (auto: on for "
                         + ", ".join(sorted(_VEHICLE_FRAME_OBS)) + ")")
+    p.add_argument("--tensorboard", type=int, default=1, help="TensorBoard event files in --out (1/0)")
+    p.add_argument("--export", type=int, default=1, help="write the final policy as --out/policy.onnx and policy.hpp (1/0)")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
     for k, v in {**_GENERIC_DEFAULTS, **_TASK_DEFAULTS.get(args.task, {})}.items():
@@ -322,9 +415,42 @@ def main(argv: list[str] | None = None) -> dict:
     rows: list[dict] = []
     t_train = 0.0
     done_steps = 0
+    live_steps = 0  # env-steps of the updates so far (moves within a chunk)
+
+    writer = None
+    if args.tensorboard:
+        from torch.utils.tensorboard import SummaryWriter
+
+        writer = SummaryWriter(log_dir=args.out, flush_secs=5)
+        writer.add_text("config", "    " + json.dumps({k: v for k, v in vars(args).items()}, indent=1).replace("\n", "\n    "), 0)
 
     log_f = open(os.path.join(args.out, "log.csv"), "w", newline="")
     log_w = None
+    from tqdm import tqdm
+
+    bar = tqdm(total=args.steps, unit="step", unit_scale=True, disable=args.quiet, desc=f"{args.learner} {args.task}")
+    prev_infos = env.task.infos
+
+    def on_update(n: int, scalars: dict) -> None:
+        """After each learner update: the training envs' episodes since the last one, the learner's statistics."""
+        nonlocal live_steps, prev_infos
+        live_steps += n
+        bar.update(n)
+        inf = env.task.infos
+        eps = inf["episodes"] - prev_infos["episodes"]
+        if eps > 0:
+            scalars["train/episodes"] = eps
+            scalars["train/mean_episode_reward"] = (inf["episode_reward_sum"] - prev_infos["episode_reward_sum"]) / eps
+            scalars["train/success_rate"] = (inf["successes"] - prev_infos["successes"]) / eps
+            scalars["train/crash_rate"] = (inf["crashes"] - prev_infos["crashes"]) / eps
+            bar.set_postfix(train_success=f"{scalars['train/success_rate']:.2f}", **last_eval, refresh=False)
+        prev_infos = inf
+        if writer is not None:
+            for k, v in scalars.items():
+                writer.add_scalar(k, v, live_steps)
+
+    learner.on_update = on_update
+    last_eval: dict = {}
 
     def eval_row() -> dict:
         nonlocal log_w
@@ -338,13 +464,19 @@ def main(argv: list[str] | None = None) -> dict:
             log_w.writeheader()
         log_w.writerow(row)
         log_f.flush()
+        if writer is not None:
+            for k in ("mean_return", "success_rate", "crash_rate", "mean_length", "final_distance_m"):
+                if np.isfinite(row[k]):
+                    writer.add_scalar(f"eval/{k}", row[k], done_steps)
+            for k in ("train_s", "sim_s", "eval_s"):
+                writer.add_scalar(f"time/{k}", row[k], done_steps)
+            writer.flush()
+        last_eval.clear()
+        last_eval.update(eval_ret=f"{row['mean_return']:.0f}", eval_success=f"{row['success_rate']:.3f}")
+        bar.set_postfix(**last_eval)
         return row
 
-    from tqdm import tqdm
-
-    bar = tqdm(total=args.steps, unit="step", unit_scale=True, disable=args.quiet, desc=f"{args.learner} {args.task}")
     row = eval_row()  # the untrained policy
-    bar.set_postfix(ret=f"{row['mean_return']:.0f}", success=f"{row['success_rate']:.2f}")
     reached = None
     while done_steps < args.steps:
         chunk = min(args.eval_every, args.steps - done_steps)
@@ -352,16 +484,20 @@ def main(argv: list[str] | None = None) -> dict:
         n = learner.train(chunk)
         t_train += time.perf_counter() - t0
         done_steps += n
-        bar.update(n)
+        if live_steps != done_steps:  # the learner's updates did not all report
+            bar.update(done_steps - live_steps)
+            live_steps = done_steps
         row = eval_row()
         learner.save(os.path.join(args.out, "checkpoints", f"{args.learner}_{done_steps}.pt"))
-        bar.set_postfix(ret=f"{row['mean_return']:.0f}", success=f"{row['success_rate']:.3f}", train_s=f"{t_train:.0f}")
         if args.target_success is not None and row["success_rate"] >= args.target_success:
             reached = row
             break
     bar.close()
 
     log_f.close()
+    exported = _export(learner, args, overrides) if args.export else None
+    if writer is not None:
+        writer.close()
     plot(rows, os.path.join(args.out, "curves.png"),
          f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
@@ -371,7 +507,7 @@ def main(argv: list[str] | None = None) -> dict:
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
-               "cpu_count": os.cpu_count()}
+               "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count()}
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
     if not args.quiet:

@@ -30,9 +30,11 @@
 #include <vector>
 
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
+#include "kestrel/sim/world.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -67,7 +69,8 @@ std::string shape_text(const nb::ndarray<>& a) {
 /// Checks an action array: float32 (or `real`), C-contiguous, shape (rows, cols), on the CPU, finite.
 /// Returns the data pointer (no copy). Raises TypeError / ValueError naming `what`.
 template <class T>
-const T* checked_actions(nb::handle h, std::size_t rows, std::size_t cols, const char* what) {
+const T* checked_actions(nb::handle h, std::size_t rows, std::size_t cols, const char* what,
+                         const char* dims = "(num_envs, action_dim)") {
   nb::ndarray<> a;
   const char* want = sizeof(T) == 4 ? "float32" : "float64";
   if (!nb::try_cast(h, a, false))
@@ -83,7 +86,7 @@ const T* checked_actions(nb::handle h, std::size_t rows, std::size_t cols, const
                              .c_str());
   if (a.ndim() != 2 || a.shape(0) != rows || a.shape(1) != cols)
     throw nb::value_error((std::string(what) + ": expected shape (" + std::to_string(rows) + ", " + std::to_string(cols) +
-                           ") = (num_envs, action_dim), got " + shape_text(a))
+                           ") = " + dims + ", got " + shape_text(a))
                               .c_str());
   if (rows * cols > 0 && (a.stride(1) != 1 || a.stride(0) != static_cast<std::int64_t>(cols)))
     throw nb::value_error(
@@ -183,6 +186,94 @@ struct KSimulator {
   std::unique_ptr<ks::Simulator> sim;
   std::size_t robots() const { return static_cast<std::size_t>(sim->num_robots()); }
 };
+
+// Range / segmentation images (Simulator::range_image, World::sensor_segmentation) as read-only
+// numpy views: element [i, r, c] of the (num_robots, height, width) view is robot i's pixel (r, c),
+// at ranges + i * robot_step + r * row_step + c * col_step (the RangeImage's own steps, so the
+// planar lidar row, stored clockwise-first, is viewed with a negative column stride: no copy).
+struct ImageLayout {
+  const void* base = nullptr;  // robot 0's pixel (0, 0)
+  std::size_t height = 0, width = 0;
+  std::int64_t robot_step = 0, row_step = 0, col_step = 0;  // elements
+};
+
+void check_image_index(const ks::Simulator& sim, int k) {
+  if (sim.num_range_images() == 0)
+    throw nb::value_error((std::string("range image: this ") + sim.backend_name() +
+                           " simulator has no range images (rigid: attach a lidar, ToF or camera through `sensors:`; "
+                           "planar: set simulator.lidar_beams)")
+                              .c_str());
+  if (k < 0 || k >= sim.num_range_images())
+    throw nb::value_error(("k: expected an image index in [0, " + std::to_string(sim.num_range_images()) + "), got " +
+                           std::to_string(k))
+                              .c_str());
+}
+
+/// Robot-major layout of image k; every robot's image must sit at a constant step from robot 0's
+/// (both backends store them that way; checked, never assumed).
+ImageLayout range_layout(const ks::Simulator& sim, int k) {
+  check_image_index(sim, k);
+  const ks::RangeImage i0 = sim.range_image(0, k);
+  ImageLayout l{i0.ranges, static_cast<std::size_t>(i0.height), static_cast<std::size_t>(i0.width), 0, i0.row_step, i0.col_step};
+  const int n = sim.num_robots();
+  if (n > 1) l.robot_step = sim.range_image(1, k).ranges - i0.ranges;
+  for (int i = 0; i < n; ++i) {
+    const ks::RangeImage im = sim.range_image(i, k);
+    if (im.ranges != i0.ranges + static_cast<std::ptrdiff_t>(i) * l.robot_step || im.height != i0.height ||
+        im.width != i0.width || im.row_step != i0.row_step || im.col_step != i0.col_step)
+      throw nb::value_error("range_images: this backend's images are not evenly spaced in memory; use range_image(robot, k)");
+  }
+  return l;
+}
+
+/// World sensor index of the k-th range image (the ray sensors in robot.sensors order, IMUs skipped).
+int world_ray_sensor(const ks::World& w, int k) {
+  for (int s = 0, seen = 0; s < w.num_sensors(); ++s)
+    if (w.sensor_config(s).kind != ks::SensorKind::imu && seen++ == k) return s;
+  return -1;
+}
+
+ImageLayout segmentation_layout(const ks::Simulator& sim, int k) {
+  check_image_index(sim, k);
+  const ks::World* w = ks::rigid_world(sim);
+  if (w == nullptr)
+    throw nb::value_error((std::string("segmentation images: the ") + sim.backend_name() +
+                           " simulator renders ranges only (its 2-D lidar has no segmentation); use simulator: rigid")
+                              .c_str());
+  const int s = world_ray_sensor(*w, k);
+  const int rpe = sim.robots_per_env();
+  const std::int32_t* b = w->sensor_segmentation(0, s, 0);
+  ImageLayout l{b, static_cast<std::size_t>(w->sensor_height(s)), static_cast<std::size_t>(w->sensor_width(s)), 0,
+                w->sensor_width(s), 1};
+  const int n = sim.num_robots();
+  if (n > 1) l.robot_step = w->sensor_segmentation(1 / rpe, s, 1 % rpe) - b;
+  for (int i = 0; i < n; ++i)
+    if (w->sensor_segmentation(i / rpe, s, i % rpe) != b + static_cast<std::ptrdiff_t>(i) * l.robot_step)
+      throw nb::value_error("segmentation_images: this world's images are not evenly spaced in memory");
+  return l;
+}
+
+template <class T>
+nb::ndarray<nb::numpy, const T, nb::ndim<3>> image_view3(const ImageLayout& l, std::size_t robots, nb::handle owner) {
+  const std::size_t shape[3] = {robots, l.height, l.width};
+  const std::int64_t strides[3] = {l.robot_step, l.row_step, l.col_step};
+  return nb::ndarray<nb::numpy, const T, nb::ndim<3>>(static_cast<const T*>(l.base), 3, shape, owner, strides);
+}
+
+template <class T>
+nb::ndarray<nb::numpy, const T, nb::ndim<2>> image_view2(const ImageLayout& l, int robot, nb::handle owner) {
+  const std::size_t shape[2] = {l.height, l.width};
+  const std::int64_t strides[2] = {l.row_step, l.col_step};
+  return nb::ndarray<nb::numpy, const T, nb::ndim<2>>(static_cast<const T*>(l.base) + robot * l.robot_step, 2, shape, owner,
+                                                       strides);
+}
+
+void check_robot(const ks::Simulator& sim, int robot) {
+  if (robot < 0 || robot >= sim.num_robots())
+    throw nb::value_error(("robot: expected a robot index in [0, " + std::to_string(sim.num_robots()) +
+                           ") (env * robots_per_env + r), got " + std::to_string(robot))
+                              .c_str());
+}
 
 template <class T>
 nb::ndarray<nb::numpy, T, nb::ndim<2>, nb::c_contig> view2(const T* p, std::size_t rows, std::size_t cols, nb::handle owner) {
@@ -461,5 +552,89 @@ NB_MODULE(_core, m) {
       .def_prop_ro("reset_buf", [](nb::pointer_and_handle<KSimulator> s) {
         return Array1<bool>(reinterpret_cast<bool*>(const_cast<std::uint8_t*>(s.p->sim->reset_buf())),
                             {static_cast<std::size_t>(s.p->sim->num_envs())}, s.h);
-      });
+      })
+      .def_prop_ro("num_range_images", [](KSimulator& s) { return s.sim->num_range_images(); },
+                   "Ray-sensor images per robot (rigid: the lidar / ToF / camera sensors in robot.sensors order, "
+                   "IMUs skipped; planar: 1 with a 2-D lidar, else 0).")
+      .def(
+          "range_images",
+          [](nb::pointer_and_handle<KSimulator> s, int k) {
+            return image_view3<real>(range_layout(*s.p->sim, k), s.p->robots(), s.h);
+          },
+          "k"_a = 0,
+          "Image k of every robot as a read-only (num_robots, height, width) view of the simulator's buffer (no copy;\n"
+          "robot index = env * robots_per_env + r, so (num_envs, H, W) with one robot per env). Element [i, r, c]:\n"
+          "row 0 the top, column 0 the leftmost (body +y side); strides from the C++ RangeImage's row_step / col_step\n"
+          "(planar: a negative column stride over its clockwise-first lidar row). Rewritten in place whenever the\n"
+          "sensors render (every step at the sensor's rate, at resets, update_sensors()); the data pointer is fixed\n"
+          "for the simulator's life and the array keeps the simulator alive. Metres (or [0, 1] where the sensor\n"
+          "normalises: range_image_info(k)['max_range_m'] is then 1); negative, non-finite or >= max_range_m: no return.")
+      .def(
+          "range_image",
+          [](nb::pointer_and_handle<KSimulator> s, int robot, int k) {
+            check_robot(*s.p->sim, robot);
+            return image_view2<real>(range_layout(*s.p->sim, k), robot, s.h);
+          },
+          "robot"_a, "k"_a = 0, "Robot `robot`'s image k as a read-only (height, width) view (range_images(k)[robot]).")
+      .def(
+          "range_image_info",
+          [](KSimulator& s, int k) {
+            check_image_index(*s.sim, k);
+            const ks::RangeImage im = s.sim->range_image(0, k);
+            nb::dict d;
+            d["height"] = im.height;
+            d["width"] = im.width;
+            d["row_step"] = static_cast<std::int64_t>(im.row_step);
+            d["col_step"] = static_cast<std::int64_t>(im.col_step);
+            d["max_range_m"] = static_cast<double>(im.max_range_m);
+            d["horizontal_fov_rad"] = static_cast<double>(im.horizontal_fov_rad);
+            return d;
+          },
+          "k"_a = 0, "Image k's RangeImage fields: height, width, row_step, col_step (elements), max_range_m, horizontal_fov_rad.")
+      .def(
+          "segmentation_images",
+          [](nb::pointer_and_handle<KSimulator> s, int k) {
+            return image_view3<std::int32_t>(segmentation_layout(*s.p->sim, k), s.p->robots(), s.h);
+          },
+          "k"_a = 0,
+          "Rigid only: image k's segmentation (obstacle semantic id, 0 the ground, -1 no hit) as a read-only int32\n"
+          "(num_robots, height, width) view, pixel for pixel with range_images(k); planar raises ValueError.")
+      .def(
+          "env_bounds",
+          [](KSimulator& s, int env) {
+            if (env < 0 || env >= s.sim->num_envs())
+              throw nb::value_error(("env: expected an env index in [0, " + std::to_string(s.sim->num_envs()) + "), got " +
+                                     std::to_string(env))
+                                        .c_str());
+            kestrel::Vec3 lo, hi;
+            s.sim->env_bounds(env, lo, hi);
+            return nb::make_tuple(nb::make_tuple(static_cast<double>(lo.x()), static_cast<double>(lo.y()), static_cast<double>(lo.z())),
+                                  nb::make_tuple(static_cast<double>(hi.x()), static_cast<double>(hi.y()), static_cast<double>(hi.z())));
+          },
+          "env"_a, "The environment's (lower, upper) bounds in the world frame for its current episode (m).")
+      .def(
+          "reset_root_states",
+          [](KSimulator& s, const std::vector<int>& ids, nb::handle pos, nb::handle quat, nb::handle lin, nb::handle ang) {
+            for (int id : ids)
+              if (id < 0 || id >= s.sim->num_envs())
+                throw nb::value_error(("env_ids: expected ids in [0, " + std::to_string(s.sim->num_envs()) + "), got " + std::to_string(id)).c_str());
+            const std::size_t rows = ids.size() * static_cast<std::size_t>(s.sim->robots_per_env());
+            const char* dims = "(len(env_ids) * robots_per_env, n)";
+            const real* p = checked_actions<real>(pos, rows, 3, "pos_w", dims);
+            const real* q = checked_actions<real>(quat, rows, 4, "quat_xyzw", dims);
+            std::vector<real> zeros(rows * 3, real(0));
+            const real* v = lin.is_none() ? zeros.data() : checked_actions<real>(lin, rows, 3, "lin_vel_w", dims);
+            const real* w = ang.is_none() ? zeros.data() : checked_actions<real>(ang, rows, 3, "ang_vel_w", dims);
+            bool ok = false;
+            {
+              nb::gil_scoped_release release;
+              ok = s.sim->reset_root_states(ids.data(), static_cast<int>(ids.size()), p, q, v, w);
+            }
+            if (!ok) throw nb::value_error(s.sim->last_error().c_str());
+          },
+          "env_ids"_a, "pos_w"_a, "quat_xyzw"_a, "lin_vel_w"_a = nb::none(), "ang_vel_w"_a = nb::none(),
+          "Puts exact root states for the listed envs (robots_per_env rows each; arrays of the real dtype,\n"
+          "kestrel._core.real_dtype): positions (m, world), unit quaternions xyzw, velocities (world; None = 0).\n"
+          "The sensor images are re-rendered at the next step or update_sensors(). ValueError (nothing changed)\n"
+          "for a state the backend cannot represent.");
 }

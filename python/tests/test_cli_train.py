@@ -1,0 +1,76 @@
+"""`kestrel train` (the package's console command, pyproject [project.scripts] -> kestrel.cli:main):
+a tiny rsl_rl run writes TensorBoard event files that tensorboard's own EventAccumulator reads back
+with the logged scalars (the evaluations equal to the CSV's), the CSV, the plot, checkpoints and
+the final policy as ONNX agreeing with the learner's own policy."""
+import csv
+import os
+import subprocess
+import sys
+from importlib.metadata import entry_points
+
+import numpy as np
+
+TASK = "Kestrel-PositionSetpoint-v0"
+
+
+def _console_script():
+    (ep,) = entry_points(group="console_scripts", name="kestrel")
+    assert ep.value == "kestrel.cli:main"
+    return ep
+
+
+def test_console_command_is_installed_and_answers():
+    _console_script()
+    exe = os.path.join(os.path.dirname(sys.executable), "kestrel")
+    assert os.access(exe, os.X_OK), exe
+    r = subprocess.run([exe, "train", "-h"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "usage: kestrel train" in r.stdout and "--learner" in r.stdout and "--tensorboard" in r.stdout
+    r = subprocess.run([exe, "nope"], capture_output=True, text=True, timeout=60, env={**os.environ, "KESTREL_CLI": "/nonexistent"})
+    assert r.returncode == 2 and "unknown command 'nope'" in r.stderr and "train" in r.stderr
+
+
+def test_kestrel_train_writes_tensorboard_csv_plot_checkpoints_and_onnx(tmp_path, capfd):
+    import json
+
+    import onnx
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    out = tmp_path / "run"
+    # 16 envs x 16 decisions x action repeat 10 = 2560 env-steps per rsl_rl update; 2 updates,
+    # evaluated before, between and after (16 episodes of 100 env-steps on an unseen seed).
+    rc = _console_script().load()(["train", TASK, "--learner", "rsl_rl", "--envs", "16", "--seed", "0", "--steps", "5120",
+                                   "--eval-every", "2560", "--eval-episodes", "16", "--episode-len", "100",
+                                   "--threads", "1", "--out", str(out)])
+    assert rc == 0
+    err = capfd.readouterr().err
+    assert "5.12k/5.12k" in err  # the progress bar reached the end
+
+    with open(out / "log.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["env_steps"]) for r in rows] == [0, 2560, 5120]
+    assert (out / "curves.png").stat().st_size > 10_000
+    assert sorted(p.name for p in (out / "checkpoints").glob("*.pt")) == ["rsl_rl_2560.pt", "rsl_rl_5120.pt"]
+
+    events = list(out.glob("events.out.tfevents.*"))
+    assert len(events) == 1
+    acc = EventAccumulator(str(out))
+    acc.Reload()
+    tags = set(acc.Tags()["scalars"])
+    for t in ("eval/mean_return", "eval/success_rate", "eval/crash_rate", "eval/mean_length", "eval/final_distance_m",
+              "time/train_s", "train/mean_episode_reward", "loss/learning_rate", "policy/mean_std", "perf/env_steps_per_s"):
+        assert t in tags, (t, sorted(tags))
+    assert any(t.startswith("loss/") and t != "loss/learning_rate" for t in tags)  # rsl_rl's own losses
+    ev = acc.Scalars("eval/mean_return")
+    assert [e.step for e in ev] == [0, 2560, 5120]
+    np.testing.assert_allclose([e.value for e in ev], [float(r["mean_return"]) for r in rows], rtol=1e-6)
+    np.testing.assert_allclose([e.value for e in acc.Scalars("eval/final_distance_m")],
+                               [float(r["final_distance_m"]) for r in rows], rtol=1e-6)
+    assert [e.step for e in acc.Scalars("policy/mean_std")] == [2560, 5120]  # one point per update
+    assert all(np.isfinite(e.value) for e in acc.Scalars("train/mean_episode_reward"))
+
+    summary = json.loads((out / "summary.json").read_text())
+    ex = summary["export"]
+    assert ex["vehicle_frame_obs"] is True and ex["observations"] >= 256
+    assert ex["max_abs_diff_spec_vs_learner"] < 1e-5 and ex["max_abs_diff_onnx_vs_spec"] < 1e-5
+    onnx.checker.check_model(onnx.load(ex["onnx"]))
+    assert "MlpParams<13, 64, 64, 4>" in (out / "policy.hpp").read_text()
