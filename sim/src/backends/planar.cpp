@@ -3,7 +3,7 @@
 // One b2World per environment (zero gravity: the plane is horizontal), stepped by the thread pool
 // over a static partition of environments. Box2D is deterministic for a single-threaded world
 // (same inputs, same order of calls -> same bits), and no environment touches another's world, so
-// results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes them).
+// results are bit-identical for any thread count (tests/sim/backends/planar_test.cpp hashes them).
 // (Box2D 2.4 keeps a few global profiling counters, b2_gjkCalls / b2_toiCalls ..., that every
 // world increments without synchronisation; they are statistics only and never read back.)
 //
@@ -45,7 +45,7 @@
 // thread-local arena is set while an environment steps or resets) they bump-allocate from that
 // environment's arena, sized at set-up (kStepArenaBytes). Arena memory freed by Box2D is not
 // reused (growth is rare and geometric); a full arena falls back to malloc and is counted
-// (Simulator::step_heap_fallbacks), never silent. tests/sim/planar_heap_test.cpp checks zero
+// (Simulator::step_heap_fallbacks), never silent. tests/sim/backends/planar_heap_test.cpp checks zero
 // malloc calls inside steps.
 #include <box2d/box2d.h>
 

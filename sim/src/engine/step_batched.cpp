@@ -4,7 +4,7 @@
 // scalar stages of step.cpp, run per environment in the same order as env_step. Environments never
 // read each other's state and the twin is bit-identical to the scalar robot step, so the result
 // does not depend on the grouping, on the thread partition or on whether the batched path is on
-// (tests/sim/batch_step_test.cpp).
+// (tests/sim/engine/batch_step_test.cpp).
 #include <cstring>
 
 #include "kestrel/sim/batch_step.hpp"

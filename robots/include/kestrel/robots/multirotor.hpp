@@ -1,7 +1,7 @@
 // The multirotor's control chain, written once: controller -> allocation -> motor model -> body
 // wrench. Every place that flies a multirotor calls it: the desktop World (sim/engine), the planar
 // backend, the firmware examples and the C API. The 4-lane SIMD twin in sim/ (batch_step.hpp) is
-// tested bit-identical against it (tests/sim/batch_step_test.cpp).
+// tested bit-identical against it (tests/sim/engine/batch_step_test.cpp).
 //
 // Shape: Pinocchio's model/data split and PX4's library-vs-module split (PX4
 // src/lib/control_allocation: one interface, the module is glue). MultirotorModel is constant after

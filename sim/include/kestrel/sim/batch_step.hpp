@@ -3,7 +3,7 @@
 // per SIMD lane (structure of arrays in registers, gathered from and scattered back to the
 // world's per-robot storage).
 //
-// Bit-identical to the scalar path, by construction and by test (tests/sim/batch_step_test.cpp):
+// Bit-identical to the scalar path, by construction and by test (tests/sim/engine/batch_step_test.cpp):
 // every lane performs the same IEEE operations in the same order as the scalar core functions
 // (update_lee_position, allocate_sequential_desaturation<4>, motor_model_step, wrench_from_thrusts,
 // step_rigid_body with Eigen 3.4's quaternion product / transformVector / reduction orders), and

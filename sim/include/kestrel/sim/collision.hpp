@@ -10,7 +10,7 @@
 //    to libccd's Minkowski Portal Refinement (G. Snethen, "XenoCollide", Game Programming Gems 7,
 //    2008; libccd ccdMPRPenetration), whose simplex lives on the stack, with support functions
 //    over the stack-allocated Shape below.
-// FCL itself is the oracle: tests/sim/collision_test.cpp checks these answers against
+// FCL itself is the oracle: tests/sim/engine/collision_test.cpp checks these answers against
 // fcl::collide on known geometry.
 //
 // Convention: a Contact between shape A (the robot) and B (an obstacle / the ground) has its

@@ -30,7 +30,7 @@
 // from them.
 //
 // Determinism: per-environment streams RngStream(seed, env, purpose); environments never read each
-// other, so results are bit-identical for any thread count (tests/sim/planar_test.cpp hashes it).
+// other, so results are bit-identical for any thread count (tests/sim/backends/planar_test.cpp hashes it).
 // No heap inside step/post_physics_step/push_robots/reset_idx after set-up (planar: after Box2D's
 // block allocator and broad-phase buffers have warmed up; see sim/src/backends/planar.cpp and the heap test).
 #pragma once

@@ -10,7 +10,7 @@
 // call (Aerial Gym's task_obs dict tensors are updated in place too), so a caller reads them
 // without copies: observations() is num_envs x obs_dim floats, rewards() num_envs floats,
 // terminations()/truncations() num_envs bytes (0/1). step() does not allocate
-// (tests/sim/task_test.cpp checks it with the heap counter).
+// (tests/sim/tasks/task_test.cpp checks it with the heap counter).
 #pragma once
 
 #include <cstdint>

@@ -5,13 +5,13 @@
 // (sim/world_data.hpp: every array a step writes, sized once), MuJoCo's mjModel / mjData split,
 // and steps them through the stage functions of sim/world_stages.hpp. The accessors below are
 // conveniences over those two; model() and data() give the whole of each (what a binding or a
-// viewer reads in place). step() never allocates (tests/sim/world_test.cpp proves it with a heap
+// viewer reads in place). step() never allocates (tests/sim/engine/world_test.cpp proves it with a heap
 // counter).
 //
 // Determinism: every environment owns its random streams RngStream(seed, env, purpose) and no
 // environment reads another's state, so a worker can advance its whole slice of environments by
 // several env-steps without synchronising, and the result is bit-identical for any thread count
-// (golden-hash test in tests/sim/world_test.cpp).
+// (golden-hash test in tests/sim/engine/world_test.cpp).
 #pragma once
 
 #include <cstddef>
