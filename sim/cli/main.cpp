@@ -20,6 +20,7 @@
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/schema.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
@@ -38,7 +39,8 @@ int usage() {
   std::fprintf(stderr,
                "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
                "                   [--task ID] [--policy scripted|zero] [--max-memory-gib G]\n"
-               "       kestrel list\n");
+               "       kestrel list\n"
+               "       kestrel schema      (the scenario reference: every key, unit, range and default)\n");
   return 2;
 }
 
@@ -310,6 +312,10 @@ int run_main(int argc, char** argv) {
     return 0;
   }
   if (cmd == "run") return run(argc, argv);
+  if (cmd == "schema") {
+    std::fputs(scenario_reference_markdown().c_str(), stdout);
+    return 0;
+  }
   return usage();
 }
 }  // namespace

@@ -160,3 +160,121 @@ TEST(SimScenario, MemoryEstimateRefusesBeforeAllocating) {
   // The estimate is what the built world reports.
   EXPECT_EQ(World::estimate_bytes(c), static_cast<double>(w->bytes_per_env()) * w->num_envs());
 }
+
+// ---- Schema tables (sim/schema.hpp): one table per config struct drives the parser and the docs.
+
+#include <fstream>
+#include <sstream>
+
+#include "kestrel/sim/schema.hpp"
+
+namespace {
+
+/// A value the field allows, as YAML, and a check that the parsed struct holds it.
+template <class S>
+std::string valid_yaml(const Field<S>& f, double& expect) {
+  std::ostringstream y;
+  y.precision(9);
+  switch (f.type) {
+    case FieldType::real_number:
+      expect = f.lo + (f.hi - f.lo) * 0.25;
+      if (f.hi - f.lo > 1e6) expect = f.lo + 3.5;  // a round number inside huge ranges
+      y << expect;
+      break;
+    case FieldType::integer:
+      expect = f.hi < f.lo ? f.lo + 2 : (f.lo + 1 <= f.hi ? f.lo + 1 : f.lo);
+      y << static_cast<int>(expect);
+      break;
+    case FieldType::boolean:
+      expect = 1;
+      y << "true";
+      break;
+    case FieldType::vec3:
+      expect = 0.125;
+      y << "[0.125, -0.25, 0.5]";
+      break;
+    case FieldType::range:
+      expect = f.lo + (f.hi - f.lo) * 0.25;
+      if (f.hi - f.lo > 1e6) expect = f.lo + 3.5;
+      y << "[" << expect << ", " << expect << "]";
+      break;
+    case FieldType::choice: {
+      expect = 0;
+      const std::string c = f.choices;
+      y << c.substr(c.rfind(", ") == std::string::npos ? 0 : c.rfind(", ") + 2);  // the last choice
+      break;
+    }
+  }
+  return y.str();
+}
+
+template <class S>
+void expect_field(const Field<S>& f, const S& s, double expect, const std::string& where) {
+  switch (f.type) {
+    case FieldType::real_number: EXPECT_FLOAT_EQ(static_cast<float>(s.*f.r), static_cast<float>(expect)) << where; break;
+    case FieldType::integer: EXPECT_EQ(s.*f.i, static_cast<int>(expect)) << where; break;
+    case FieldType::boolean: EXPECT_TRUE(s.*f.b) << where; break;
+    case FieldType::vec3: EXPECT_EQ((s.*f.v)[2], 0.5_r) << where; break;
+    case FieldType::range:
+      EXPECT_FLOAT_EQ(static_cast<float>(s.*f.r), static_cast<float>(expect)) << where;
+      EXPECT_FLOAT_EQ(static_cast<float>(s.*f.r_max), static_cast<float>(expect)) << where;
+      break;
+    case FieldType::choice: {
+      const std::string c = f.choices;
+      EXPECT_EQ(std::string(f.get_choice(s)), c.substr(c.rfind(", ") == std::string::npos ? 0 : c.rfind(", ") + 2)) << where;
+      break;
+    }
+  }
+}
+
+/// Every row of a section's schema: a valid value under its own key reaches its member; a value
+/// outside the allowed set is refused with a message naming section.key.
+template <class S>
+void every_row(const Schema<S>& sc, const char* preset, S WorldConfig::*member) {
+  for (std::size_t k = 0; k < sc.count; ++k) {
+    const Field<S>& f = sc.fields[k];
+    double expect = 0;
+    const std::string text = std::string(sc.section) + ": {name: " + preset + ", " + f.key + ": " + valid_yaml(f, expect) + "}\n";
+    WorldConfig c;
+    std::string err;
+    ASSERT_TRUE(load_scenario_string(text, "s.yaml", c, err)) << text << err;
+    expect_field(f, c.*member, expect, text);
+    if (f.type == FieldType::real_number || (f.type == FieldType::integer && f.hi >= f.lo)) {
+      const std::string bad_text = std::string(sc.section) + ": {name: " + preset + ", " + f.key + ": 1e12}\n";
+      EXPECT_NE(error_of(bad_text).find(std::string(sc.section) + "." + f.key + ": expected"), std::string::npos) << bad_text;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(SimScenario, EverySchemaRowIsReachableUnderItsOwnName) {
+  every_row(sim_schema(), "base_sim", &WorldConfig::sim);
+  every_row(env_schema(), "empty", &WorldConfig::env);
+  every_row(robot_schema(), "base_quadrotor", &WorldConfig::robot);
+  every_row(task_schema(), "position_setpoint", &WorldConfig::task);
+  every_row(simulator_schema(), "rigid", &WorldConfig::simulator);
+  every_row(controller_schema(), "lee_position_control", &WorldConfig::controller);
+}
+
+TEST(SimScenario, OlderKeysStillRead) {
+  WorldConfig a, b;
+  std::string err;
+  ASSERT_TRUE(load_scenario_string("env: {name: empty, collision_force_threshold: 2.5, lower_bound_min: [-7, -7, 0]}", "a", a, err)) << err;
+  ASSERT_TRUE(load_scenario_string("env: {name: empty, collision_force_threshold_N: 2.5, lower_bound_min_m: [-7, -7, 0]}", "b", b, err)) << err;
+  EXPECT_EQ(a.env.collision_force_threshold_N, 2.5_r);
+  EXPECT_EQ(b.env.collision_force_threshold_N, 2.5_r);
+  EXPECT_EQ(a.env.lower_bound_min_m, b.env.lower_bound_min_m);
+  EXPECT_NE(error_of("env: {name: empty, collision_force_threshold: -1}").find("env.collision_force_threshold: expected a number in [0, "),
+            std::string::npos);
+}
+
+TEST(SimScenario, ReferenceDocMatchesTheSchemas) {
+  // docs/scenario_reference.md is generated (`kestrel schema > docs/scenario_reference.md`); a
+  // schema change without regenerating it fails here.
+  std::ifstream f(KESTREL_SIM_TEST_DIR "/../../docs/scenario_reference.md");
+  ASSERT_TRUE(f.good());
+  std::stringstream committed;
+  committed << f.rdbuf();
+  EXPECT_EQ(committed.str(), scenario_reference_markdown());
+}

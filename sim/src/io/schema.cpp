@@ -1,0 +1,427 @@
+// The schema tables of the config structs (sim/schema.hpp) and the scenario reference generated
+// from them. Ranges are those the scenario parser has always enforced; keys are the members' names.
+#include "kestrel/sim/schema.hpp"
+
+#include <cstdio>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include "kestrel/sim/limits.hpp"
+
+namespace kestrel::sim {
+
+namespace {
+
+constexpr double kNoMax = -1;  // integer hi < lo: no upper bound
+
+template <class S>
+Field<S> real_f(const char* key, real S::*m, const char* unit, double lo, double hi, const char* doc, const char* alias = nullptr) {
+  Field<S> f;
+  f.key = key;
+  f.unit = unit;
+  f.type = FieldType::real_number;
+  f.r = m;
+  f.lo = lo;
+  f.hi = hi;
+  f.doc = doc;
+  f.alias = alias;
+  return f;
+}
+template <class S>
+Field<S> int_f(const char* key, int S::*m, double lo, double hi, const char* limit, const char* doc) {
+  Field<S> f;
+  f.key = key;
+  f.type = FieldType::integer;
+  f.i = m;
+  f.lo = lo;
+  f.hi = hi;
+  f.limit = limit;
+  f.doc = doc;
+  return f;
+}
+template <class S>
+Field<S> bool_f(const char* key, bool S::*m, const char* doc) {
+  Field<S> f;
+  f.key = key;
+  f.type = FieldType::boolean;
+  f.b = m;
+  f.doc = doc;
+  return f;
+}
+template <class S>
+Field<S> vec3_f(const char* key, Vec3 S::*m, const char* unit, const char* doc, const char* alias = nullptr) {
+  Field<S> f;
+  f.key = key;
+  f.unit = unit;
+  f.type = FieldType::vec3;
+  f.v = m;
+  f.lo = -1e9;
+  f.hi = 1e9;
+  f.doc = doc;
+  f.alias = alias;
+  return f;
+}
+template <class S>
+Field<S> range_f(const char* key, real S::*mn, real S::*mx, const char* unit, double lo, double hi, const char* doc) {
+  Field<S> f;
+  f.key = key;
+  f.unit = unit;
+  f.type = FieldType::range;
+  f.r = mn;
+  f.r_max = mx;
+  f.lo = lo;
+  f.hi = hi;
+  f.doc = doc;
+  return f;
+}
+template <class S>
+Field<S> choice_f(const char* key, const char* choices, bool (*set)(S&, const std::string&), const char* (*get)(const S&), const char* doc) {
+  Field<S> f;
+  f.key = key;
+  f.type = FieldType::choice;
+  f.choices = choices;
+  f.set_choice = set;
+  f.get_choice = get;
+  f.doc = doc;
+  return f;
+}
+
+/// Name <-> enum value tables for the choice fields (one list per enum, in declaration order).
+template <class E, std::size_t N>
+bool set_enum(const char* const (&names)[N], const std::string& v, E& out) {
+  for (std::size_t k = 0; k < N; ++k)
+    if (v == names[k]) {
+      out = static_cast<E>(k);
+      return true;
+    }
+  return false;
+}
+template <class E, std::size_t N>
+const char* enum_name(const char* const (&names)[N], E e) {
+  const auto k = static_cast<std::size_t>(e);
+  return k < N ? names[k] : "?";
+}
+const char* const kIntegrators[] = {"semi_implicit_euler", "rk4"};
+const char* const kVehicles[] = {"automatic", "ground_vehicle", "multirotor"};
+using allocation::AirframePreset;
+const std::pair<const char*, AirframePreset> kAirframes[] = {
+    {"base_quadrotor", AirframePreset::base_quadrotor}, {"x500", AirframePreset::x500}, {"hexarotor", AirframePreset::hexarotor}};
+template <class E, std::size_t N>
+bool set_enum(const std::pair<const char*, E> (&names)[N], const std::string& v, E& out) {
+  for (const auto& p : names)
+    if (v == p.first) {
+      out = p.second;
+      return true;
+    }
+  return false;
+}
+template <class E, std::size_t N>
+const char* enum_name(const std::pair<const char*, E> (&names)[N], E e) {
+  for (const auto& p : names)
+    if (p.second == e) return p.first;
+  return "(a preset)";
+}
+const char* const kShapes[] = {"sphere", "box", "capsule", "cylinder"};
+const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall", "wall", "thin", "sphere", "mesh"};
+const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
+
+}  // namespace
+
+const Schema<SimParams>& sim_schema() {
+  using S = SimParams;
+  static const Field<S> f[] = {
+      real_f<S>("dt_s", &S::dt_s, "s", 1e-6, 1, "physics step (Aerial Gym's sim dt)"),
+      int_f<S>("substeps", &S::substeps, 1, kMaxSubsteps, "kMaxSubsteps", "integrator sub-steps per physics step (dynamics only)"),
+      vec3_f<S>("gravity_w", &S::gravity_w, "m/s^2", "gravity, world frame (z up)"),
+      choice_f<S>(
+          "integrator", "rk4, semi_implicit_euler",
+          [](S& s, const std::string& v) { return set_enum(kIntegrators, v, s.integrator); },
+          [](const S& s) { return enum_name(kIntegrators, s.integrator); }, "rigid-body integrator (PhysX is semi-implicit)"),
+      real_f<S>("contact_stiffness_N_m", &S::contact_stiffness_N_m, "N/m", 0, 1e9, "penalty contact spring along the normal"),
+      real_f<S>("contact_damping_N_s_m", &S::contact_damping_N_s_m, "N s/m", 0, 1e9, "penalty contact damper along the normal"),
+      real_f<S>("friction_coefficient", &S::friction_coefficient, "", 0, 100, "Coulomb friction coefficient"),
+      real_f<S>("friction_damping_N_s_m", &S::friction_damping_N_s_m, "N s/m", 0, 1e9,
+                "viscous regularisation of Coulomb friction inside the cone"),
+  };
+  static const Schema<S> s{"sim", "physics parameters (`sim: NAME` or a map with `name` and overrides)", f, std::size(f), nullptr, 0};
+  return s;
+}
+
+const Schema<SimulatorConfig>& simulator_schema() {
+  using S = SimulatorConfig;
+  static const Field<S> f[] = {
+      choice_f<S>(
+          "vehicle", "automatic, ground_vehicle, multirotor",
+          [](S& s, const std::string& v) { return set_enum(kVehicles, v, s.vehicle); },
+          [](const S& s) { return enum_name(kVehicles, s.vehicle); }, "planar: what drives in the plane (automatic: by robot)"),
+      real_f<S>("wheelbase_m", &S::wheelbase_m, "m", 1e-3, 100, "ground vehicle: front-to-rear axle distance"),
+      real_f<S>("max_speed_m_s", &S::max_speed_m_s, "m/s", 1e-3, 1000, "ground vehicle: speed command limit"),
+      real_f<S>("max_steering_rad", &S::max_steering_rad, "rad", 1e-3, 1.4, "ground vehicle: steering angle limit"),
+      real_f<S>("altitude_m", &S::altitude_m, "m", -1e4, 1e4, "planar multirotor: the held flight height"),
+      int_f<S>("lidar_beams", &S::lidar_beams, 0, kNoMax, nullptr, "planar 2-D lidar beams (0: none)"),
+      real_f<S>("lidar_fov_rad", &S::lidar_fov_rad, "rad", 1e-3, 6.2831853, "planar lidar field of view, centred on body x"),
+      real_f<S>("lidar_max_range_m", &S::lidar_max_range_m, "m", 1e-3, 1e4, "planar lidar maximum range"),
+      real_f<S>("max_push_vel_xy_m_s", &S::max_push_vel_xy_m_s, "m/s", 0, 100, "push_robots: v_x, v_y drawn in [-max, max]"),
+      real_f<S>("com_bias_max_m", &S::com_bias_max_m, "m", 0, 10, "planar: centre-of-mass offset x, y drawn in [-max, max]"),
+      range_f<S>("added_mass_kg", &S::added_mass_min_kg, &S::added_mass_max_kg, "kg", -1e6, 1e6, "planar: added mass per reset, [min, max]"),
+      range_f<S>("motor_scale", &S::motor_scale_min, &S::motor_scale_max, "", 1e-3, 1e3, "planar: motor / drive constant scale, [min, max]"),
+      range_f<S>("gain_scale", &S::gain_scale_min, &S::gain_scale_max, "", 1e-3, 1e3, "planar: controller gain scale, [min, max]"),
+  };
+  static const Schema<S> s{"simulator", "physics backend (`simulator: rigid|planar` or a map; KESTREL_SIMULATOR overrides the name)",
+                           f, std::size(f), nullptr, 0};
+  return s;
+}
+
+const Schema<EnvConfig>& env_schema() {
+  using S = EnvConfig;
+  static const Field<S> f[] = {
+      int_f<S>("num_envs", &S::num_envs, 1, kMaxNumEnvs, "kMaxNumEnvs", "parallel environments"),
+      real_f<S>("num_physics_steps_per_env_step_mean", &S::num_physics_steps_per_env_step_mean, "", 1, kMaxPhysicsStepsPerEnvStep,
+                "physics steps per env-step (decimation), mean"),
+      real_f<S>("num_physics_steps_per_env_step_std", &S::num_physics_steps_per_env_step_std, "", 0, kMaxPhysicsStepsPerEnvStep,
+                "physics steps per env-step, standard deviation (drawn per reset)"),
+      vec3_f<S>("lower_bound_min_m", &S::lower_bound_min_m, "m", "lower bound drawn per reset in [min, max]", "lower_bound_min"),
+      vec3_f<S>("lower_bound_max_m", &S::lower_bound_max_m, "m", "", "lower_bound_max"),
+      vec3_f<S>("upper_bound_min_m", &S::upper_bound_min_m, "m", "upper bound drawn per reset in [min, max]", "upper_bound_min"),
+      vec3_f<S>("upper_bound_max_m", &S::upper_bound_max_m, "m", "", "upper_bound_max"),
+      bool_f<S>("reset_on_collision", &S::reset_on_collision, "a crash ends the episode"),
+      real_f<S>("collision_force_threshold_N", &S::collision_force_threshold_N, "N", 0, 1e9, "contact normal force counted as a crash",
+                "collision_force_threshold"),
+      bool_f<S>("create_ground_plane", &S::create_ground_plane, "a ground plane under the bounds"),
+      int_f<S>("keep_same_env_for_num_episodes", &S::keep_same_env_for_num_episodes, 1, kNoMax, nullptr,
+               "episodes on one obstacle layout before a new one is drawn"),
+      bool_f<S>("sample_timestep_for_latency", &S::sample_timestep_for_latency, "per-reset action latency in physics steps"),
+      int_f<S>("max_latency_physics_steps", &S::max_latency_physics_steps, 0, kMaxLatencyPhysicsSteps, "kMaxLatencyPhysicsSteps",
+               "latency drawn in [0, max]"),
+      bool_f<S>("perturb_observations", &S::perturb_observations, "Gaussian noise on what the controller sees"),
+      real_f<S>("observation_noise_position_m", &S::observation_noise_position_m, "m", 0, 1e3, "position noise standard deviation"),
+      real_f<S>("observation_noise_velocity_m_s", &S::observation_noise_velocity_m_s, "m/s", 0, 1e3, "velocity noise standard deviation"),
+      bool_f<S>("enable_disturbance", &S::enable_disturbance, "random force / torque disturbances (Aerial Gym's robot `disturbance`)"),
+      real_f<S>("prob_apply_disturbance", &S::prob_apply_disturbance, "", 0, 1, "probability per physics step"),
+      vec3_f<S>("max_force_disturbance_N", &S::max_force_disturbance_N, "N", "disturbance force drawn in [-max, max], body frame"),
+      vec3_f<S>("max_torque_disturbance_Nm", &S::max_torque_disturbance_Nm, "N m", "disturbance torque drawn in [-max, max], body frame"),
+      real_f<S>("curriculum_level", &S::curriculum_level, "", 0, 1, "obstacle count between min_num_assets (0) and num_assets (1)"),
+  };
+  static const StructuralKey st[] = {
+      {"include_asset_type", "map asset class -> true/false: drop the preset's classes set false"},
+      {"assets", "list of asset class maps (section env.assets[]), appended to the preset's"},
+      {"terrain", "the ground (section env.terrain)"},
+  };
+  static const Schema<S> s{"env", "environment (`env: NAME` or a map with `name` and overrides)", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<AssetClass>& asset_schema() {
+  using S = AssetClass;
+  static const Field<S> f[] = {
+      choice_f<S>(
+          "kind", "tree, panel, cube, rod, small_wall, wall, thin, sphere, mesh",
+          [](S& s, const std::string& v) { return set_enum(kAssetKinds, v, s.kind); },
+          [](const S& s) { return enum_name(kAssetKinds, s.kind); }, "shape family (required)"),
+      int_f<S>("num_assets", &S::num_assets, 0, kMaxAssetsPerClass, "kMaxAssetsPerClass", "count at curriculum level 1"),
+      int_f<S>("min_num_assets", &S::min_num_assets, 0, kNoMax, nullptr, "count at curriculum level 0 (default: num_assets)"),
+      vec3_f<S>("min_position_ratio", &S::min_position_ratio, "", "position drawn in [min, max] x (upper - lower) from the lower bound"),
+      vec3_f<S>("max_position_ratio", &S::max_position_ratio, "", ""),
+      vec3_f<S>("min_euler_rad", &S::min_euler_rad, "rad", "orientation drawn in [min, max] (Euler XYZ)"),
+      vec3_f<S>("max_euler_rad", &S::max_euler_rad, "rad", ""),
+      vec3_f<S>("min_size_m", &S::min_size_m, "m", "size drawn in [min, max]; per kind (sim/src/scene/layout.cpp)"),
+      vec3_f<S>("max_size_m", &S::max_size_m, "m", ""),
+      bool_f<S>("keep_in_env", &S::keep_in_env, "the curriculum never removes it"),
+      int_f<S>("semantic_id", &S::semantic_id, 0, kMaxAssetSemanticId, "kMaxAssetSemanticId", "segmentation id"),
+      real_f<S>("max_speed_m_s", &S::max_speed_m_s, "m/s", 0, 1000, "moving obstacles: velocity drawn per reset in [-max, max]"),
+      real_f<S>("max_angular_speed_rad_s", &S::max_angular_speed_rad_s, "rad/s", 0, 1000, "spinning obstacles: world-frame rate in [-max, max]"),
+  };
+  static const StructuralKey st[] = {{"name", "class name (required, unique)"},
+                                     {"mesh_file", "kind mesh: .obj / .stl file, relative to the scenario"}};
+  static const Schema<S> s{"env.assets[]", "one obstacle class", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<TerrainConfig>& terrain_schema() {
+  using S = TerrainConfig;
+  static const Field<S> f[] = {
+      choice_f<S>(
+          "type", "plane, heightfield, trimesh", [](S& s, const std::string& v) { return set_enum(kTerrains, v, s.type); },
+          [](const S& s) { return enum_name(kTerrains, s.type); }, "ground model (required)"),
+      real_f<S>("horizontal_scale_m", &S::horizontal_scale_m, "m", 1e-4, 1e3, "heightfield grid spacing"),
+      real_f<S>("vertical_scale_m", &S::vertical_scale_m, "m", 1e-9, 1e3, "image pixel value -> metres"),
+      vec3_f<S>("origin_m", &S::origin_m, "m", "grid centre x, y and a z offset (trimesh: a translation)"),
+      real_f<S>("length_x_m", &S::length_x_m, "m", 1e-3, 1e4, "procedural grid length"),
+      real_f<S>("width_y_m", &S::width_y_m, "m", 1e-3, 1e4, "procedural grid width"),
+      real_f<S>("slope", &S::slope, "", -100, 100, "slope, pyramid_slope: rise per metre"),
+      real_f<S>("platform_size_m", &S::platform_size_m, "m", 0, 1e4, "pyramid_*: flat top width"),
+      real_f<S>("step_width_m", &S::step_width_m, "m", 1e-4, 1e4, "stairs: step width"),
+      real_f<S>("step_height_m", &S::step_height_m, "m", -100, 100, "stairs: step height"),
+      real_f<S>("min_height_m", &S::min_height_m, "m", -1e3, 1e3, "random_uniform: lowest height"),
+      real_f<S>("max_height_m", &S::max_height_m, "m", -1e3, 1e3, "random_uniform: highest height"),
+      real_f<S>("height_step_m", &S::height_step_m, "m", 1e-6, 1e3, "random_uniform: height quantum"),
+      real_f<S>("downsampled_scale_m", &S::downsampled_scale_m, "m", 1e-4, 1e4, "random_uniform: spacing of the random samples"),
+      int_f<S>("num_waves", &S::num_waves, 1, kMaxNumWaves, "kMaxNumWaves", "wave: number of waves"),
+      real_f<S>("amplitude_m", &S::amplitude_m, "m", -100, 100, "wave: amplitude"),
+      bool_f<S>("measure_heights", &S::measure_heights, "legged_gym's measured_heights around each robot"),
+  };
+  static const StructuralKey st[] = {
+      {"heights_m", "heightfield: list of rows (row j = y index j) of heights, m"},
+      {"image_file", "heightfield: .pgm / .png heightmap, relative to the scenario"},
+      {"procedural", "heightfield generator: flat, slope, pyramid_slope, stairs, pyramid_stairs, random_uniform, wave"},
+      {"mesh_file", "trimesh: .obj / .stl file, relative to the scenario"},
+      {"measured_points_x_m", "body-yaw-frame x offsets of the height points, m (alias measured_points_x)"},
+      {"measured_points_y_m", "body-yaw-frame y offsets of the height points, m (alias measured_points_y)"},
+      {"measured_points_x", "older name of measured_points_x_m"},
+      {"measured_points_y", "older name of measured_points_y_m"},
+  };
+  static const Schema<S> s{"env.terrain", "the ground of every environment", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<RobotConfig>& robot_schema() {
+  using S = RobotConfig;
+  static const Field<S> f[] = {
+      int_f<S>("robots_per_env", &S::robots_per_env, 1, kMaxRobotsPerEnv, "kMaxRobotsPerEnv", "robots in each environment"),
+      choice_f<S>(
+          "airframe", "base_quadrotor, x500, hexarotor", [](S& s, const std::string& v) { return set_enum(kAirframes, v, s.airframe); },
+          [](const S& s) { return enum_name(kAirframes, s.airframe); }, "rotor layout and motor model preset"),
+      real_f<S>("mass_kg", &S::mass_kg, "kg", 1e-6, 1e6, "mass"),
+      vec3_f<S>("inertia_diag_kg_m2", &S::inertia_diag_kg_m2, "kg m^2", "principal inertia, body frame"),
+      vec3_f<S>("linear_drag_b", &S::linear_drag_b, "N s/m", "linear drag, body frame"),
+      vec3_f<S>("quadratic_drag_b", &S::quadratic_drag_b, "N s^2/m^2", "quadratic drag, body frame"),
+      vec3_f<S>("angular_drag_b", &S::angular_drag_b, "N m s", "angular drag, body frame"),
+      vec3_f<S>("quadratic_angular_drag_b", &S::quadratic_angular_drag_b, "N m s^2", "quadratic angular drag, body frame"),
+      vec3_f<S>("min_init_position_ratio", &S::min_init_position_ratio, "", "start drawn in [min, max] x (upper - lower) from the lower bound"),
+      vec3_f<S>("max_init_position_ratio", &S::max_init_position_ratio, "", ""),
+      real_f<S>("max_init_yaw_rad", &S::max_init_yaw_rad, "rad", 0, 3.14159265358979, "start yaw drawn in [-max, max]"),
+      bool_f<S>("use_desaturation", &S::use_desaturation, "sequential desaturation (false: Aerial Gym's clamped pseudo-inverse)"),
+  };
+  static const StructuralKey st[] = {
+      {"urdf", "URDF file: mass, inertia, collision shape and rotors (the keys here override it)"},
+      {"file", "a robot file with these same keys"},
+      {"collision_shape", "the robot's collision shape (section robot.collision_shape)"},
+  };
+  static const Schema<S> s{"robot", "the robot (`robot: NAME` or a map with `name` and overrides)", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<ShapeSpec>& shape_schema() {
+  using S = ShapeSpec;
+  static const Field<S> f[] = {
+      choice_f<S>(
+          "type", "sphere, box, capsule, cylinder", [](S& s, const std::string& v) { return set_enum(kShapes, v, s.type); },
+          [](const S& s) { return enum_name(kShapes, s.type); }, "shape (required)"),
+      real_f<S>("radius_m", &S::radius_m, "m", 1e-4, 100, "sphere / capsule / cylinder radius"),
+      real_f<S>("half_length_m", &S::half_length_m, "m", 0, 100, "capsule / cylinder: half the axis segment (local z)"),
+      vec3_f<S>("half_extents_m", &S::half_extents_m, "m", "box half extents"),
+  };
+  static const Schema<S> s{"robot.collision_shape", "collision shape in the body frame", f, std::size(f), nullptr, 0};
+  return s;
+}
+
+const Schema<ControllerConfig>& controller_schema() {
+  using S = ControllerConfig;
+  static const Field<S> f[] = {
+      bool_f<S>("randomize_gains", &S::randomize_gains, "draw the Lee gains per reset within their ranges"),
+  };
+  static const Schema<S> s{"controller", "the controller (`controller: NAME`, a registry name, or a map with `name`)", f, std::size(f),
+                           nullptr, 0};
+  return s;
+}
+
+const Schema<TaskConfig>& task_schema() {
+  using S = TaskConfig;
+  static const Field<S> f[] = {
+      int_f<S>("episode_len_env_steps", &S::episode_len_env_steps, 1, kNoMax, nullptr, "episode length"),
+      real_f<S>("success_radius_m", &S::success_radius_m, "m", 0, 1e6, "an episode at its time limit succeeds within this of the target"),
+      vec3_f<S>("min_target_ratio", &S::min_target_ratio, "", "target drawn in [min, max] x (upper - lower) from the lower bound"),
+      vec3_f<S>("max_target_ratio", &S::max_target_ratio, "", ""),
+      real_f<S>("clearance_m", &S::clearance_m, "m", 0, 100, "start and target clear every obstacle by this (beyond the bound radius)"),
+      bool_f<S>("line_of_sight", &S::line_of_sight, "the straight path from start to target is clear too"),
+      int_f<S>("placement_attempts", &S::placement_attempts, 1, kMaxPlacementAttempts, "kMaxPlacementAttempts",
+               "candidate (start, target) pairs drawn per reset"),
+      real_f<S>("setpoint_speed_m_s", &S::setpoint_speed_m_s, "m/s", 0, 1000, "moving setpoint speed towards the target (0: the target)"),
+  };
+  static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f), nullptr, 0};
+  return s;
+}
+
+namespace {
+
+std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+template <class S>
+void document(std::ostringstream& out, const Schema<S>& sc) {
+  const S def{};
+  out << "## `" << sc.section << "`\n\n" << sc.doc << ".\n\n| key | unit | type | allowed | default | meaning |\n|---|---|---|---|---|---|\n";
+  for (std::size_t k = 0; k < sc.count; ++k) {
+    const Field<S>& f = sc.fields[k];
+    std::string type, allowed, dflt;
+    switch (f.type) {
+      case FieldType::real_number:
+        type = "number";
+        allowed = "[" + num(f.lo) + ", " + num(f.hi) + "]";
+        dflt = num(def.*f.r);
+        break;
+      case FieldType::integer:
+        type = "integer";
+        allowed = f.hi < f.lo ? ">= " + num(f.lo) : "[" + num(f.lo) + ", " + num(f.hi) + "]" + (f.limit ? std::string(" (") + f.limit + ")" : "");
+        dflt = std::to_string(def.*f.i);
+        break;
+      case FieldType::boolean:
+        type = "bool";
+        allowed = "true, false";
+        dflt = (def.*f.b) ? "true" : "false";
+        break;
+      case FieldType::vec3: {
+        type = "[x, y, z]";
+        allowed = "numbers";
+        const Vec3& v = def.*f.v;
+        dflt = "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
+        break;
+      }
+      case FieldType::range:
+        type = "[min, max]";
+        allowed = "[" + num(f.lo) + ", " + num(f.hi) + "], min <= max";
+        dflt = "[" + num(def.*f.r) + ", " + num(def.*f.r_max) + "]";
+        break;
+      case FieldType::choice:
+        type = "name";
+        allowed = f.choices;
+        dflt = f.get_choice(def);
+        break;
+    }
+    std::string key = std::string("`") + f.key + "`";
+    if (f.alias) key += " (or `" + std::string(f.alias) + "`)";
+    out << "| " << key << " | " << (f.unit[0] ? f.unit : "-") << " | " << type << " | " << allowed << " | " << dflt << " | " << f.doc << " |\n";
+  }
+  for (std::size_t k = 0; k < sc.num_structural; ++k)
+    out << "| `" << sc.structural[k].key << "` | | | | | " << sc.structural[k].doc << " |\n";
+  out << "\n";
+}
+
+}  // namespace
+
+std::string scenario_reference_markdown() {
+  std::ostringstream out;
+  out << "# Scenario reference\n\n"
+         "Generated from the schema tables (`sim/src/io/schema.cpp`) by `kestrel schema`; "
+         "`tests/sim/io/scenario_test.cpp` keeps this file equal to what they generate. Every section is a registry name "
+         "(`kestrel list`) or a map with `name` and the keys below; a key overrides the preset's value. Defaults are the "
+         "struct's own, before a preset. Top level: `sim`, `env`, `robot`, `controller`, `task`, `sensors` (list of sensor "
+         "names or `{name, every}`), `simulator`, `seed`, `threads` [1, " +
+             std::to_string(kMaxThreads) + "], `max_memory_gib`.\n\n";
+  document(out, sim_schema());
+  document(out, simulator_schema());
+  document(out, env_schema());
+  document(out, asset_schema());
+  document(out, terrain_schema());
+  document(out, robot_schema());
+  document(out, shape_schema());
+  document(out, controller_schema());
+  document(out, task_schema());
+  return out.str();
+}
+
+}  // namespace kestrel::sim
