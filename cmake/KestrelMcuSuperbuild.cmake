@@ -55,6 +55,9 @@ ExternalProject_Add(kestrel_mcu_cortex_m4f
     -DKESTREL_BUILD_TESTS=ON
     "-DKESTREL_GOLDEN_DIR_DEFAULT=${KESTREL_GOLDEN_DIR_DEFAULT}"
     "-DKESTREL_QEMU_SYSTEM_ARM=${KESTREL_QEMU_SYSTEM_ARM}"
+    # The host build of the policy firmware example: the MCU tree's ctest
+    # kestrel_firmware_policy.host_parity compares its trajectory hashes with the QEMU run's.
+    "-DKESTREL_HOST_FIRMWARE_POLICY=$<TARGET_FILE:kestrel_firmware_policy_host>"
   BUILD_ALWAYS ON  # the sub-build's own ninja decides what is out of date
   INSTALL_COMMAND ""
   TEST_COMMAND "")

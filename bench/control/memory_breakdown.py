@@ -6,7 +6,7 @@
 
 Roles come from the linked image's own call graph (arm-none-eabi-objdump -d: `bl`/`b` targets,
 so inlining is already accounted for): per-step code is everything reachable from cascade_step
-(the function a flight controller calls every control period), set-up code what only setup()
+(the function a flight controller calls every control period; policy_step in the policy image), set-up code what only setup()
 reaches (airframe, pseudo-inverse, presets, resets), static initialisation what only the
 _GLOBAL__sub_I_* constructors reach (zeroing of the state objects). Data symbols are split into
 read-only data (flash) and RAM (.data/.bss). The CSV has one row per symbol (role, bytes, name)
@@ -75,7 +75,8 @@ def main():
     empty, image = symbols(sys.argv[1]), symbols(sys.argv[2])
     graph, fnames = call_graph(sys.argv[2])
     roots = lambda pat: [a for a, n in fnames.items() if re.search(pat, n)]  # noqa: E731
-    step = reach(graph, roots(r"cascade_step"))
+    # cascade_step: the control-stack images; policy_step: the policy image (KESTREL_STACK_POLICY).
+    step = reach(graph, roots(r"cascade_step|policy_step"))
     setup = reach(graph, roots(r"setup")) - step
     init = reach(graph, roots(r"^_GLOBAL__sub_I_")) - step - setup
     rows, seen_addr = [], set()

@@ -28,6 +28,15 @@ PEERS = [  # measured side by side with public flight stacks (issue 6), Cortex-M
     ("PX4 pseudo-inverse (one time)", 23700),
 ]
 FLASH_TARGET, RAM_TARGET = 12 * 1024, 512
+# Issue 11: one 13-64-64-4 inference within 16,000 instructions on the Cortex-M4F (the STM32F405
+# of the netduinoplus2 too: the same core, the same counts), and the policy controller alone (its
+# code + float32 weights, the policy image minus the empty one) within 22 KB of flash.
+POLICY_TARGETS = {
+    ("mlp_forward_13_64_64_4_tanh", "policy"): 16000,
+    ("mlp_forward_13_64_64_4_elu", "policy"): 16000,
+}
+POLICY_TARGET_BOARDS = ("cortex-m4f", "netduinoplus2")
+POLICY_FLASH_TARGET = 22 * 1024
 
 
 def png(path, rows, width=640, bar_h=14):
@@ -76,15 +85,17 @@ def short_symbol(name):
     return name[cut:]
 
 
-def render_breakdown(results, target, image="cascade_quad", csv_name="memory_breakdown.csv"):
+def render_breakdown(results, target, image="cascade_quad", csv_name="memory_breakdown.csv",
+                     what="the quad control stack's"):
     """<target>/memory_breakdown.csv (memory_breakdown.py): the quad control stack's bytes by role,
-    with its largest symbols (memory_breakdown_baked.csv: the same for cascade_quad_baked)."""
+    with its largest symbols (memory_breakdown_baked.csv: the same for cascade_quad_baked;
+    memory_breakdown_policy.csv: the policy controller alone)."""
     path = os.path.join(results, target, csv_name)
     if not os.path.isfile(path):
         return []
     with open(path) as f:
         rows = list(csv.DictReader(f))
-    out = [f"Where the quad control stack's bytes go ({image} image minus the empty image; roles from",
+    out = [f"Where {what} bytes go ({image} image minus the empty image; roles from",
            "the linked image's call graph, bench/control/memory_breakdown.py):", "",
            "| role | bytes | largest symbols |", "|---|---:|---|"]
     for t in (r for r in rows if r["row"] == "total"):
@@ -92,6 +103,27 @@ def render_breakdown(results, target, image="cascade_quad", csv_name="memory_bre
         names = ", ".join(f"{short_symbol(r['symbol'])} {r['bytes']}" for r in syms)
         out.append(f"| {t['role']} | {t['bytes']} | {names} |")
     return out + [""]
+
+
+def render_policy_memory(results, target, mrows):
+    """The policy image's row of memory.csv against the 22 KB goal, split into the weights' object
+    and everything else (code) with memory_breakdown_policy.csv."""
+    pol = next((r for r in mrows if r["image"] == "policy"), None)
+    if pol is None:
+        return []
+    fl, ram = int(pol["flash_minus_empty"]), int(pol["static_ram_minus_empty"])
+    weights = None
+    path = os.path.join(results, target, "memory_breakdown_policy.csv")
+    if os.path.isfile(path):
+        with open(path) as f:
+            weights = sum(int(r["bytes"]) for r in csv.DictReader(f)
+                          if r["row"] == "symbol" and "kPositionPolicy" in r["symbol"])
+    split = f" = {weights} B of float32 weights and normalisation/action constants (kPositionPolicy) + {fl - weights} B of code (and alignment)" \
+        if weights else ""
+    verdict = "met" if fl <= POLICY_FLASH_TARGET else "NOT met"
+    return ["", f"Policy controller alone (policy image minus the empty image: observation builder -> 13-64-64-4 ELU MLP "
+                f"of platform/firmware/position_policy.hpp -> action clip, validate_mlp at start-up): flash {fl} B{split} "
+                f"(goal <= {POLICY_FLASH_TARGET} B: {verdict}), static RAM {ram} B (the held action; activations on the stack)."]
 
 
 def render_stack(results, target, control_rows):
@@ -217,6 +249,8 @@ def main():
         for r in rows:
             v = float(r["instructions_per_call"])
             t = TARGETS.get((r["function"], r["airframe"])) if target == "cortex-m4f" else None
+            if target in POLICY_TARGET_BOARDS:
+                t = POLICY_TARGETS.get((r["function"], r["airframe"]), t)
             verdict = "" if t is None else (f"<= {t}: met" if v <= t else f"<= {t}: NOT met")
             out.append(f"| {r['function']} | {r['airframe']} | {v:.1f} | {r['stack_bytes']} | {verdict} |")
             if r["function"] not in ("pseudo_inverse", "build_allocation_model"):
@@ -240,9 +274,12 @@ def main():
                                               "re-allocation on board needs"}.get(casc["image"], "default rotor capacity 12")
                 out += ["", f"Control stack ({casc['image']} image, {what}): flash {fl} B (target <= {FLASH_TARGET}: {'met' if fl <= FLASH_TARGET else 'NOT met'}), "
                             f"static RAM {ram} B (target <= {RAM_TARGET}: {'met' if ram <= RAM_TARGET else 'NOT met'})."]
+            out += render_policy_memory(results, target, mrows)
             out.append("")
         out += render_breakdown(results, target)
         out += render_breakdown(results, target, "cascade_quad_baked", "memory_breakdown_baked.csv")
+        out += render_breakdown(results, target, "policy", "memory_breakdown_policy.csv",
+                                "the policy controller's (observation -> 13-64-64-4 MLP -> action clip)")
         out += render_stack(results, target, rows)
     out += render_host_micro(results)
     out += ["## Peers (issue 6, same emulator and compiler, not re-measured here)", "", "| peer | instructions/call |", "|---|---:|"]

@@ -4,10 +4,13 @@
 #   bench/results/<target>/memory.csv   flash / static RAM of the control stack (minimal images)
 #   bench/results/<target>/memory_breakdown.csv  the quad control stack's bytes by role and symbol
 #   bench/results/<target>/memory_breakdown_baked.csv  the same for the baked quad stack
+#   bench/results/<target>/memory_breakdown_policy.csv the trained position policy alone (observation,
+#                                       MLP, action clip; weights in flash) by role and symbol
 #   bench/results/<target>/stack.csv    static worst-case stack bound per entry point from GCC's
 #                                       call graph (stack_usage.py, -fcallgraph-info=su)
 #
 #   bench/control/run-mcu-bench.sh <mcu build dir> <target name, e.g. cortex-m4f>
+#   (KESTREL_BENCH_JOBS: parallel build and compile jobs, default 2)
 #
 # The build dir is a configured Cortex-M tree (e.g. build/host/mcu-cortex-m4f, which the host
 # preset builds, or cmake --preset cortex-m4f); this script builds the bench images in it.
@@ -22,8 +25,10 @@ build=$(cd "$build" && pwd)
 out="$root/bench/results/$target"
 mkdir -p "$out"
 
-cmake --build "$build" -j 2 --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade \
-  kestrel_stack_cascade_quad kestrel_stack_cascade_quad_baked kestrel_stack_capi
+jobs=${KESTREL_BENCH_JOBS:-2}
+export KESTREL_BENCH_JOBS="$jobs"  # stack_usage.py's compile jobs
+cmake --build "$build" -j "$jobs" --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade \
+  kestrel_stack_cascade_quad kestrel_stack_cascade_quad_baked kestrel_stack_capi kestrel_stack_policy
 machine=$(sed -n 's/^KESTREL_BOARD:[A-Z]*=//p' "$build/CMakeCache.txt")
 qemu=${QEMU:-qemu-system-arm}
 # The images' folder: bench/control/mcu in a Cortex-M tree (older trees: bench/control-mcu).
@@ -64,8 +69,11 @@ set -- $(mem empty); e_text=$1 e_data=$2 e_bss=$3
   # cascade: the control stack with the default rotor capacity (12); cascade_quad: the same with
   # the allocation library built for 4 rotors (KESTREL_MAX_ROTORS=4), as a quad's firmware would;
   # cascade_quad_baked: the quad stack with parameters, allocation model and initial state
-  # generated at build time (bench/control/mcu/baked_cascade.hpp; no on-board set-up code).
-  for img in empty cascade cascade_quad cascade_quad_baked capi; do
+  # generated at build time (bench/control/mcu/baked_cascade.hpp; no on-board set-up code);
+  # policy: the trained position policy alone (observation -> 13-64-64-4 MLP -> action clip, its
+  # weights constexpr in flash, validate_mlp at start-up), no controller behind it: its flash and
+  # static RAM are this image minus the empty one.
+  for img in empty cascade cascade_quad cascade_quad_baked capi policy; do
     set -- $(mem $img)
     echo "$img,$1,$2,$3,$(($1 + $2)),$(($2 + $3)),$(($1 + $2 - e_text - e_data)),$(($2 + $3 - e_data - e_bss))"
   done
@@ -76,8 +84,11 @@ python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.e
   "$imgdir/kestrel_stack_cascade_quad.elf" "$out/memory_breakdown.csv" > /dev/null
 python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.elf" \
   "$imgdir/kestrel_stack_cascade_quad_baked.elf" "$out/memory_breakdown_baked.csv" > /dev/null
+# The policy image by symbol: the weights' object (kPositionPolicy, .rodata) and the code.
+python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.elf" \
+  "$imgdir/kestrel_stack_policy.elf" "$out/memory_breakdown_policy.csv" > /dev/null
 # Static worst-case stack (GCC's frame sizes over the call graph); control.csv's stack_bytes column
 # is the painted-stack measurement of one call.
 python3 "$root/bench/control/stack_usage.py" "$build" "$out/stack.csv"
-echo "run-mcu-bench: wrote $out/control.csv, $out/memory.csv, $out/memory_breakdown{,_baked}.csv and $out/stack.csv"
+echo "run-mcu-bench: wrote $out/control.csv, $out/memory.csv, $out/memory_breakdown{,_baked,_policy}.csv and $out/stack.csv"
 cat "$out/control.csv" "$out/memory.csv" "$out/stack.csv"

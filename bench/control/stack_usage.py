@@ -35,7 +35,7 @@ import tempfile
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The core, the C API, and the board runtime (assertion and fault paths end in its console).
-CORE_DIRS = ("kernel/", "controllers/", "allocation/", "sensors/", "platform/capi/", "platform/cortex-m/src/",
+CORE_DIRS = ("kernel/", "controllers/", "allocation/", "robots/", "sensors/", "platform/capi/", "platform/cortex-m/src/",
              "platform/common/")
 
 # Entry points: (name in the report, demangled-name prefix of the function, control.csv rows whose
@@ -100,7 +100,9 @@ def compile_ci(build):
         return os.path.join(tmp, rel.replace("/", "_") + ".ci")
 
     try:
-        with concurrent.futures.ThreadPoolExecutor(max_workers=2) as ex:
+        # KESTREL_BENCH_JOBS (run-mcu-bench.sh passes it): the machine may be shared.
+        jobs_n = max(1, int(os.environ.get("KESTREL_BENCH_JOBS", "2")))
+        with concurrent.futures.ThreadPoolExecutor(max_workers=jobs_n) as ex:
             return tmp, list(ex.map(run, jobs))
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -55,7 +55,7 @@ RigidBodyAccel accel(const RigidBodyModel& m, const Quat& q, const Vec3& v_w, co
 inline Vec4 quat_deriv(const Quat& q, const Vec3& w_b) {
   // dq/dt = 1/2 q (x) (w_b, 0)
   const Quat omega = quat_from_xyzw(w_b[0], w_b[1], w_b[2], 0);
-  const Quat d = q * omega;
+  const Quat d = quat_mul(q, omega);  // not q * omega: the same bits on host and MCU
   return to_xyzw(d) * 0.5_r;
 }
 
@@ -66,7 +66,7 @@ Deriv deriv(const RigidBodyModel& m, const Vec3& /*p*/, const Quat& q, const Vec
 }
 
 inline Quat normalized_or_identity(const Vec4& xyzw) {
-  const real n = xyzw.norm();
+  const real n = norm_xyzw(xyzw);  // not xyzw.norm(): the same bits on host and MCU
   if (!(n > 0) || !is_finite(n)) return Quat::Identity();
   return quat_from_xyzw(xyzw / n);
 }
@@ -97,7 +97,7 @@ Status step_rigid_body(const RigidBodyModel& model, RigidBodyState& s, const Wre
       const real sh = std::sin(h);
       dq = quat_from_xyzw(axis[0] * sh, axis[1] * sh, axis[2] * sh, std::cos(h));
     }
-    n.orientation_wb = normalized_or_identity(to_xyzw(s.orientation_wb * dq));
+    n.orientation_wb = normalized_or_identity(to_xyzw(quat_mul(s.orientation_wb, dq)));
   } else {
     const Vec3 p0 = s.position_w, v0 = s.linvel_w, w0 = s.angvel_b;
     const Vec4 q0 = to_xyzw(s.orientation_wb);

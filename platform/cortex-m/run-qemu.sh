@@ -2,7 +2,7 @@
 # Runs a Kestrel MCU image under QEMU with semihosting and judges the result.
 #   run-qemu.sh --qemu <qemu-system-arm> --machine <mps2-anNNN> --elf <image.elf> --name <argv0>
 #               [--golden-default <dir>] [--timeout <seconds>] [--ktest]
-#               [--expect-status <n>] [--expect-output <extended regex>]
+#               [--expect-status <n>] [--expect-output <extended regex>] [--save-output <file>]
 # The golden directory passed to the image (second semihosting argument) is $KESTREL_GOLDEN_DIR
 # if set and non-empty, else --golden-default. -icount shift=0 makes timing deterministic: each
 # instruction advances virtual time by 1 ns (SysTick at 25 MHz on the MPS2 boards: one tick per 40
@@ -15,8 +15,11 @@
 # given with --expect-status), with --ktest the output has a line "<N> passed, 0 failed" with
 # N >= 1, and with --expect-output a line matches that regex. Extra QEMU options can be
 # given in $KESTREL_QEMU_EXTRA_ARGS (e.g. "-d unimp,guest_errors").
+# --save-output: the image's output is also written to <file> (removed first, so a failed or
+# interrupted run never leaves an earlier run's output behind) for a later ctest to read
+# (platform/firmware: kestrel_firmware_policy.host_parity).
 set -u
-qemu=qemu-system-arm machine= elf= name=image golden_default= timeout=600 ktest=0 expect_status=0 expect_output=
+qemu=qemu-system-arm machine= elf= name=image golden_default= timeout=600 ktest=0 expect_status=0 expect_output= save_output=
 while [ $# -gt 0 ]; do
   case $1 in
     --qemu) qemu=$2; shift 2 ;;
@@ -28,6 +31,7 @@ while [ $# -gt 0 ]; do
     --ktest) ktest=1; shift ;;
     --expect-status) expect_status=$2; shift 2 ;;
     --expect-output) expect_output=$2; shift 2 ;;
+    --save-output) save_output=$2; shift 2 ;;
     *) echo "run-qemu: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -43,6 +47,7 @@ esc() { printf '%s' "$1" | sed 's/,/,,/g'; }
 semi="enable=on,target=native,arg=$(esc "$name")"
 [ -n "$golden" ] && semi="$semi,arg=$(esc "$golden")"
 
+[ -n "$save_output" ] && rm -f "$save_output"
 log=$(mktemp "${TMPDIR:-/tmp}/kestrel-qemu.XXXXXX")
 trap 'rm -f "$log"' EXIT INT TERM
 echo "run-qemu: $qemu -M $machine -nographic -semihosting-config $semi -icount shift=0,sleep=off -kernel $elf"
@@ -53,6 +58,7 @@ timeout -k 5 "$timeout" "$qemu" -M "$machine" -nographic -semihosting-config "$s
 rc=$?
 end=$(date +%s)
 cat "$log"
+[ -n "$save_output" ] && cp "$log" "$save_output"
 echo "run-qemu: exit status $rc after $((end - start)) s"
 if [ $rc -eq 124 ] || [ $rc -eq 137 ]; then
   echo "run-qemu: FAIL: timed out after $timeout s" >&2

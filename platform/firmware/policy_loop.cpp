@@ -1,6 +1,7 @@
 #include "policy_loop.hpp"
 
 #include <cmath>
+#include <cstring>
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/platform/console.hpp"
@@ -32,6 +33,28 @@ void hover_at(const FlightConfig& c, FlightStack& s, Plant& p) {
   (void)robots::multirotor_reset(s.model, s.state, nullptr, rng, hover);
 }
 
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+// FNV-1a over the object representation of each state component (memcpy: no type punning), in a
+// fixed order, so equal hashes mean every bit of every step's state was equal.
+std::uint64_t hash_state(std::uint64_t h, const RigidBodyState& st) {
+  real v[13];
+  for (int i = 0; i < 3; ++i) {
+    v[i] = st.position_w[i];
+    v[7 + i] = st.linvel_w[i];
+    v[10 + i] = st.angvel_b[i];
+  }
+  for (int i = 0; i < 4; ++i) v[3 + i] = st.orientation_wb.coeffs()[i];  // Eigen stores xyzw
+  unsigned char b[sizeof v];
+  std::memcpy(b, v, sizeof v);
+  for (const unsigned char c : b) {
+    h ^= c;
+    h *= kFnvPrime;
+  }
+  return h;
+}
+
 }  // namespace
 
 Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock, WaitFn wait, PolicyFlightReport& r) {
@@ -51,6 +74,7 @@ Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock
     real sum_sq = 0;
     int count = 0;
     real e = 0;
+    std::uint64_t hash = kFnvOffset;
     for (int k = 0; k < steps; ++k) {
       if (wait != nullptr) wait();
       const real t = static_cast<real>(k) * dt;
@@ -78,6 +102,7 @@ Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock
         control_step(s, p.state, command, dt);
       }
       plant_step(s, p, dt);
+      hash = hash_state(hash, p.state);
       e = (target_w - p.state.position_w).norm();
       if (!is_finite(e)) r.finite = false;
       if (t + dt > hold_start) {
@@ -91,9 +116,11 @@ Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock
       r.hold_rms_error_m = rms;
       r.final_error_m = e;
       r.faults = robots::multirotor_faults(s.state);
+      r.policy_trajectory_hash = hash;
     } else {
       r.lee_hold_rms_error_m = rms;
       r.lee_final_error_m = e;
+      r.lee_trajectory_hash = hash;
     }
   }
   return Status::ok;
@@ -131,6 +158,12 @@ void print_policy_report(const PolicyFlightReport& r, const char* target, const 
   print_fixed(static_cast<double>(r.control_cost_total) * cost_scale / r.steps, 1);
   print(" ");
   println(cost_unit);
+  // One line, same format on every target: the parity ctest compares it between host and MCU.
+  print("  trajectory hash (FNV-1a over the plant state bits of every step): policy ");
+  print_uint(r.policy_trajectory_hash);
+  print(", Lee ");
+  print_uint(r.lee_trajectory_hash);
+  println("");
 }
 
 }  // namespace kestrel::firmware

@@ -28,6 +28,12 @@ struct PolicyFlightReport {
   std::uint32_t faults = 0;
   std::uint64_t policy_cost_total = 0;   // clock units summed over inferences (observation + MLP)
   std::uint64_t control_cost_total = 0;  // clock units of the chain after the policy
+  // FNV-1a (64-bit) over the bits of the plant state (position, orientation xyzw, linear and
+  // angular velocity) after every step of each flight: the host build and the MCU image print
+  // it, and the ctest kestrel_firmware_policy.host_parity requires the same values, so the desktop
+  // harness is shown to reproduce the firmware's trajectory bit for bit, not within a tolerance.
+  std::uint64_t policy_trajectory_hash = 0;
+  std::uint64_t lee_trajectory_hash = 0;
   bool finite = true;
 };
 

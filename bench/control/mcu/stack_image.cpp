@@ -18,11 +18,20 @@
 //                          desaturation parameters in flash, the allocator and motor states
 //                          constant-initialised; LeeParams, LeeState and the model are copied
 //                          from flash tables into RAM at start-up (Eigen members: see there);
-//   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable).
+//   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable);
+//   KESTREL_STACK_POLICY   the trained position policy as a command source, alone: what
+//                          policy_loop.cpp runs before Lee velocity control (observation builder
+//                          in the vehicle frame -> policy::mlp_forward over the exported
+//                          13-64-64-4 ELU network of platform/firmware/position_policy.hpp, weights
+//                          constexpr in flash -> the task's action clip, the last action held on a
+//                          rejected inference) plus validate_mlp at start-up, stepped from
+//                          volatile inputs. No Lee controller, allocation or plant: those are the
+//                          cascade image's. Static RAM: the held action only (the activations
+//                          are on the stack, control.csv's mlp_forward stack_bytes).
 // Nothing is printed: the console and its number formatting would count as control stack.
 #include <cstdint>
 
-#if !defined(KESTREL_STACK_EMPTY)
+#if !defined(KESTREL_STACK_EMPTY) && !defined(KESTREL_STACK_POLICY)
 #include "kestrel/allocation/airframe.hpp"
 #include "kestrel/allocation/allocation_model.hpp"
 #include "kestrel/allocation/motor_model.hpp"
@@ -35,6 +44,13 @@
 #endif
 #if defined(KESTREL_STACK_CAPI)
 #include "kestrel/kestrel.h"
+#endif
+#if defined(KESTREL_STACK_POLICY)
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/rigid_body.hpp"
+#include "kestrel/policy/mlp.hpp"
+#include "kestrel/policy/observations.hpp"
+#include "position_policy.hpp"  // platform/firmware: the network the firmware example flies
 #endif
 
 namespace {
@@ -149,6 +165,46 @@ int main() {
     kestrel_output out;
     (void)kestrel_step(&g_storage, &st, &sp, 0.002f, &out);
     for (int i = 0; i < 4; ++i) g_out[i] = out.motor_command[i];
+  }
+  return 0;
+}
+#elif defined(KESTREL_STACK_POLICY)
+namespace {
+using kestrel::real;
+using kestrel::policy::generated::kPositionPolicy;
+constexpr real kTaskActionClip = 10;  // as policy_loop.cpp: position_setpoint_task's clip
+real g_action[4];                     // the last accepted action, held on a rejected inference
+
+// One inference as the firmware runs it every control period (policy_loop.cpp, pass 0), the root
+// of memory_breakdown.py's per-step code.
+__attribute__((noinline)) void policy_step(const real (&in)[13], const real (&target)[3]) {
+  using namespace kestrel;
+  RigidBodyState b;
+  b.position_w = Vec3(in[0], in[1], in[2]);
+  b.linvel_w = Vec3(in[3], in[4], in[5]);
+  b.orientation_wb = Quat(in[9], in[6], in[7], in[8]);
+  b.angvel_b = Vec3(in[10], in[11], in[12]);
+  float obs_f[policy::kPositionSetpointObsDim];
+  policy::position_setpoint_observation_vehicle_frame(b, Vec3(target[0], target[1], target[2]), obs_f);
+  real obs[policy::kPositionSetpointObsDim];
+  for (int i = 0; i < policy::kPositionSetpointObsDim; ++i) obs[i] = static_cast<real>(obs_f[i]);
+  real a[4];
+  if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok)
+    for (int i = 0; i < 4; ++i) g_action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
+  for (int i = 0; i < 4; ++i) g_out[i] = g_action[i];
+}
+
+// The firmware checks the network once before flying it (policy_loop.cpp); counted as set-up code.
+__attribute__((noinline)) bool setup() { return kestrel::policy::validate_mlp(kPositionPolicy) == kestrel::Status::ok; }
+}  // namespace
+
+int main() {
+  if (!setup()) return 1;
+  for (std::uint32_t k = 0; k < g_steps; ++k) {
+    real in[13];
+    for (int i = 0; i < 13; ++i) in[i] = g_in[i];
+    const real target[3] = {g_in[0], g_in[1], 1};
+    policy_step(in, target);
   }
   return 0;
 }

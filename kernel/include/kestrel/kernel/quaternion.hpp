@@ -24,6 +24,38 @@ inline Quat quat_from_xyzw(const Vec4& xyzw) { return quat_from_xyzw(xyzw[0], xy
 /// xyzw components of a quaternion.
 inline Vec4 to_xyzw(const Quat& q) { return Vec4(q.x(), q.y(), q.z(), q.w()); }
 
+/// Hamilton product a (x) b with the same bits on every target. Eigen's `a * b` for float
+/// quaternions takes its SSE path on the x86-64 host (Geometry_SIMD.h, quat_product) and its
+/// generic formula on the MCUs, and the two sum the four products of each component in different
+/// orders, so the host's and the firmware's trajectories drifted apart from the second step of a
+/// flight (ctest kestrel_firmware_policy.host_parity). This writes the SSE path's order out in
+/// scalar code: the host's bits are unchanged (and so is sim/src/batch_kernel.inc, which mirrors
+/// them), and every MCU now computes them too. Double builds keep Eigen's product (no cross-target
+/// claim there; kernel/math.hpp's exp_det/tanh_det are the library's in double as well).
+inline Quat quat_mul(const Quat& a, const Quat& b) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return a * b;
+#else
+  const real ax = a.x(), ay = a.y(), az = a.z(), aw = a.w();
+  const real bx = b.x(), by = b.y(), bz = b.z(), bw = b.w();
+  return quat_from_xyzw((ax * bw - az * by) + (ay * bz + aw * bx),  //
+                        (ay * bw - ax * bz) + (az * bx + aw * by),  //
+                        (az * bw - ay * bx) + (ax * by + aw * bz),  //
+                        (aw * bw - ax * bx) - (az * bz + ay * by));
+#endif
+}
+
+/// |q| of xyzw components with the same bits on every target: Eigen's `norm()` of a float Vec4 is
+/// one SSE reduction on the host, (x^2 + z^2) + (y^2 + w^2), and a pairwise unrolled sum on the
+/// MCUs, (x^2 + y^2) + (z^2 + w^2); this is the host's order in scalar code (see quat_mul).
+inline real norm_xyzw(const Vec4& q) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return q.norm();
+#else
+  return std::sqrt((q[0] * q[0] + q[2] * q[2]) + (q[1] * q[1] + q[3] * q[3]));
+#endif
+}
+
 /// Rotate v by q (q v q*), i.e. body -> world for q_wb.
 inline Vec3 rotate(const Quat& q, const Vec3& v) { return q._transformVector(v); }
 /// Rotate v by q^-1 (world -> body for q_wb). q must be unit.
