@@ -253,6 +253,58 @@ ImageLayout segmentation_layout(const ks::Simulator& sim, int k) {
   return l;
 }
 
+/// A read-only (rows x cols) view of `T` values that start at `first` and repeat every `row_bytes`
+/// bytes (a member of each element of an array of structs), owned by `owner`.
+template <class T>
+nb::ndarray<nb::numpy, const T> strided_view(const void* first, std::size_t rows, std::size_t cols, std::size_t row_bytes,
+                                             nb::handle owner) {
+  const std::size_t shape[2] = {rows, cols};
+  const std::int64_t strides[2] = {static_cast<std::int64_t>(row_bytes / sizeof(T)), 1};
+  return nb::ndarray<nb::numpy, const T>(static_cast<const T*>(first), cols == 1 ? 1 : 2, shape, owner, strides);
+}
+
+/// The rigid World's data (sim/world_data.hpp) as numpy views without copies: what a step writes,
+/// in place. The arrays are sized once, so the views stay valid while the simulator lives.
+nb::dict world_data_views(const ks::Simulator& sim, nb::handle owner) {
+  const ks::World* w = ks::rigid_world(sim);
+  if (w == nullptr)
+    throw nb::value_error((std::string("world_data: the ") + sim.backend_name() +
+                           " simulator keeps its state in Box2D, not in a WorldData; use simulator: rigid (or the base_* views)")
+                              .c_str());
+  const ks::WorldData& d = w->data();
+  const ks::WorldModel& m = w->model();
+  static_assert(sizeof(kestrel::Vec3) == 3 * sizeof(kestrel::real), "Vec3 arrays are (n x 3) reals");
+  static_assert(sizeof(kestrel::RigidBodyState) % sizeof(kestrel::real) == 0, "state rows are whole reals");
+  const std::size_t n = d.state.size(), e = static_cast<std::size_t>(m.num_envs), sb = sizeof(kestrel::RigidBodyState);
+  nb::dict out;
+  out["position_w"] = strided_view<kestrel::real>(d.state[0].position_w.data(), n, 3, sb, owner);
+  out["orientation_xyzw"] = strided_view<kestrel::real>(d.state[0].orientation_wb.coeffs().data(), n, 4, sb, owner);
+  out["linvel_w"] = strided_view<kestrel::real>(d.state[0].linvel_w.data(), n, 3, sb, owner);
+  out["angvel_b"] = strided_view<kestrel::real>(d.state[0].angvel_b.data(), n, 3, sb, owner);
+  out["contact_force_w"] = strided_view<kestrel::real>(d.contact_force_w.data(), n, 3, sizeof(kestrel::Vec3), owner);
+  out["contact_torque_b"] = strided_view<kestrel::real>(d.contact_torque_b.data(), n, 3, sizeof(kestrel::Vec3), owner);
+  out["target_w"] = strided_view<kestrel::real>(d.target_w.data(), n, 3, sizeof(kestrel::Vec3), owner);
+  out["setpoint_w"] = strided_view<kestrel::real>(d.setpoint_w.data(), n, 3, sizeof(kestrel::Vec3), owner);
+  out["actions"] = strided_view<kestrel::real>(d.actions.data(), n, kestrel::kMaxActionDim, kestrel::kMaxActionDim * sizeof(kestrel::real), owner);
+  out["crashed"] = strided_view<std::uint8_t>(d.crashed.data(), n, 1, 1, owner);
+  out["episode_step"] = strided_view<int>(d.episode_step.data(), e, 1, sizeof(int), owner);
+  out["num_obstacles"] = strided_view<int>(d.num_obstacles.data(), e, 1, sizeof(int), owner);
+  out["lower_w"] = strided_view<kestrel::real>(d.lower_w.data(), e, 3, sizeof(kestrel::Vec3), owner);
+  out["upper_w"] = strided_view<kestrel::real>(d.upper_w.data(), e, 3, sizeof(kestrel::Vec3), owner);
+  if (m.obstacle_capacity > 0) {
+    // (num_envs, capacity, 3): slot i of env e; only the first num_obstacles[e] are in use.
+    const std::size_t cap = static_cast<std::size_t>(m.obstacle_capacity), ob = sizeof(ks::Obstacle);
+    const std::size_t shape[3] = {e, cap, 3};
+    const std::int64_t strides[3] = {static_cast<std::int64_t>(cap * ob / sizeof(kestrel::real)),
+                                     static_cast<std::int64_t>(ob / sizeof(kestrel::real)), 1};
+    out["obstacle_position_w"] = nb::ndarray<nb::numpy, const kestrel::real>(d.obstacles[0].shape.position_w.data(), 3, shape, owner, strides);
+  }
+  if (m.height_points > 0)
+    out["measured_heights"] = strided_view<kestrel::real>(d.measured_heights.data(), n, static_cast<std::size_t>(m.height_points),
+                                                          static_cast<std::size_t>(m.height_points) * sizeof(kestrel::real), owner);
+  return out;
+}
+
 template <class T>
 nb::ndarray<nb::numpy, const T, nb::ndim<3>> image_view3(const ImageLayout& l, std::size_t robots, nb::handle owner) {
   const std::size_t shape[3] = {robots, l.height, l.width};
@@ -591,6 +643,14 @@ NB_MODULE(_core, m) {
             return d;
           },
           "k"_a = 0, "Image k's RangeImage fields: height, width, row_step, col_step (elements), max_range_m, horizontal_fov_rad.")
+      .def(
+          "world_data", [](nb::pointer_and_handle<KSimulator> s) { return world_data_views(*s.p->sim, s.h); },
+          "Rigid only: the World's data (sim/world_data.hpp) as read-only numpy views without copies, a dict:\n"
+          "position_w, orientation_xyzw, linvel_w, angvel_b (num_robots, 3|4; strided over the state rows),\n"
+          "contact_force_w, contact_torque_b, target_w, setpoint_w (num_robots, 3), actions (num_robots, kMaxActionDim),\n"
+          "crashed (num_robots,), episode_step, num_obstacles (num_envs,), lower_w, upper_w (num_envs, 3),\n"
+          "obstacle_position_w (num_envs, capacity, 3) and measured_heights (num_robots, points) where present.\n"
+          "The arrays are sized once: the views stay valid, and change in place, as the simulator steps.")
       .def(
           "segmentation_images",
           [](nb::pointer_and_handle<KSimulator> s, int k) {
