@@ -31,6 +31,9 @@ __all__ = [
     "Task",
     "box2d_hooks_active",
     "list",
+    "register",
+    "PythonTask",
+    "PythonTaskVectorEnv",
     "load_scenario_file",
     "load_scenario_string",
     "make_simulator",
@@ -57,6 +60,32 @@ def list(kind: str | None = None, descriptions: bool = False):  # noqa: A001 - t
     if kind is not None:
         return pick(regs[kind])
     return {k: pick(v) for k, v in regs.items()}
+
+
+_SINGULAR = {"sims": "sim", "envs": "env", "robots": "robot", "controllers": "controller", "sensors": "sensor",
+             "tasks": "task", "simulators": "simulator"}
+_DEFAULT_BASE = {"sim": "base_sim", "env": "empty", "robot": "base_quadrotor", "task": "position_setpoint",
+                 "simulator": "rigid"}
+
+
+def register(kind: str, name: str, base: str | None = None, description: str = "", **fields: Any) -> None:
+    """Registers a preset at run time, as Aerial Gym's register_sim / register_env / register_robot:
+    kind 'sim', 'env', 'robot', 'controller', 'sensor', 'task' or 'simulator' (plural accepted);
+    the preset is `base` (a registered name; sims, envs, robots, tasks and simulators have a
+    default) with `fields` overridden, under the scenario keys of that section
+    (docs/scenario_reference.md), checked now. Scenarios, make_simulator and make_task can then
+    name it. Errors (ValueError) name the kind, the name and the field.
+
+        kestrel.register("sim", "falling_forwards", base="base_sim", gravity_w=[5.0, 0.0, -9.81])
+    """
+    k = _SINGULAR.get(kind, kind)
+    if base is None:
+        if k not in _DEFAULT_BASE:
+            raise ValueError(f"register {kind} {name!r}: base: expected the name of a registered {k} to start from")
+        base = _DEFAULT_BASE[k]
+    section = dict(fields)
+    section["name"] = base
+    _core.register_preset(k, name, json.dumps(section), description)
 
 
 def task_ids() -> builtins.list[str]:
@@ -142,5 +171,6 @@ def make_simulator(scenario: Any = None, *, num_envs: int | None = None, seed: i
 
 
 from .vector_env import GYM_IDS, KestrelVectorEnv, make_vec, register_envs  # noqa: E402
+from .python_task import PythonTask, PythonTaskVectorEnv  # noqa: E402
 
 register_envs()

@@ -425,6 +425,14 @@ NB_MODULE(_core, m) {
 
   m.def("load_scenario_string", &load_string, "text"_a, "name"_a = "<string>",
         "Parses a scenario from YAML text (JSON is YAML too); ValueError names the field and the allowed values.");
+  m.def(
+      "register_preset",
+      [](const std::string& kind, const std::string& name, const std::string& section, const std::string& description) {
+        std::string err;
+        if (!ks::register_preset(kind, name, section, description, err)) throw nb::value_error(err.c_str());
+      },
+      "kind"_a, "name"_a, "section"_a, "description"_a = "",
+      "Registers a preset (sim, env, robot, controller, sensor, task, simulator) from a scenario section (YAML/JSON text).");
   m.def("load_scenario_file", &load_file, "path"_a, "Parses a scenario file (paths inside are relative to it).");
 
   nb::class_<KTask>(m, "Task",
@@ -574,6 +582,10 @@ NB_MODULE(_core, m) {
           },
           "env_ids"_a)
       .def("push_robots", [](KSimulator& s) { s.sim->push_robots(); })
+      .def(
+          "set_auto_reset", [](KSimulator& s, bool on) { s.sim->set_auto_reset(on); }, "on"_a,
+          "False: step() only flags reset_buf for ended episodes; the caller reads the final state and calls reset_idx.")
+      .def_prop_ro("episode_len_env_steps", [](KSimulator& s) { return s.sim->config().task.episode_len_env_steps; })
       .def("update_sensors", [](KSimulator& s) {
         nb::gil_scoped_release release;
         s.sim->update_sensors();

@@ -360,6 +360,71 @@ bool load_scenario_string(const std::string& text, const std::string& source_nam
   return load([&] { return YAML::Load(text); }, source_name, "", out, error);
 }
 
+bool register_preset(const std::string& kind, const std::string& name, const std::string& section_yaml,
+                     const std::string& description, std::string& error) {
+  const std::string where = "register " + kind + " \"" + name + "\": ";
+  Registries& r = registries();
+  auto add = [&](auto& registry, auto value) {
+    if (name.empty() || registry.has(name)) {
+      error = where + (name.empty() ? "expected a non-empty name" : "the name is taken; registered: " + registry.joined());
+      return false;
+    }
+    return registry.add(name, description, [value] { return value; });
+  };
+  try {
+    const YAML::Node n = YAML::Load(section_yaml);
+    if (kind == "sim") {
+      SimParams v;
+      parse_sim(n, v);
+      v.name = name;
+      return add(r.sims, v);
+    }
+    if (kind == "env") {
+      EnvConfig v;
+      parse_env(n, v, "", "<register>");
+      v.name = name;
+      return add(r.envs, v);
+    }
+    if (kind == "robot") {
+      RobotConfig v;
+      parse_robot(n, v, "");
+      v.name = name;
+      return add(r.robots, v);
+    }
+    if (kind == "simulator") {
+      SimulatorConfig v;
+      parse_simulator(n, v);
+      return add(r.simulators, v);
+    }
+    if (kind == "task") {
+      TaskConfig v = lookup(r.tasks, section_name(n, "task"), "task");
+      apply_schema(n, "task", task_schema(), v);
+      v.name = name;
+      return add(r.tasks, v);
+    }
+    if (kind == "controller") {
+      // The controller's name stays its kind's (it selects the control law); the preset adds options.
+      ControllerConfig v = lookup(r.controllers, section_name(n, "controller"), "controller");
+      apply_schema(n, "controller", controller_schema(), v);
+      return add(r.controllers, v);
+    }
+    if (kind == "sensor") {
+      SensorConfig v = lookup(r.sensors, section_name(n, "sensor"), "sensor");
+      check_keys(n, "sensor", {"every"});
+      if (n.IsMap() && n["every"]) v.every_env_steps = get_int(n["every"], "sensor.every", 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps");
+      v.name = name;
+      return add(r.sensors, v);
+    }
+    error = where + "kind: expected one of sim, env, robot, controller, sensor, task, simulator";
+    return false;
+  } catch (const ScenarioError& e) {
+    error = where + e.what();
+  } catch (const YAML::Exception& e) {
+    error = where + e.what();
+  }
+  return false;
+}
+
 const char* default_scenario_yaml() {
   return "# Embedded default: 1024 quadrotors flying position setpoints through the forest.\n"
          "seed: 0\n"

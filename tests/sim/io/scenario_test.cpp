@@ -278,3 +278,28 @@ TEST(SimScenario, ReferenceDocMatchesTheSchemas) {
   committed << f.rdbuf();
   EXPECT_EQ(committed.str(), scenario_reference_markdown());
 }
+
+TEST(SimScenario, RegisterPresetAtRunTime) {
+  std::string err;
+  // Aerial Gym's "falling forwards" sim, registered from a section and then named by a scenario.
+  ASSERT_TRUE(register_preset("sim", "test_falling_sideways", "{name: base_sim, gravity_w: [0, 5, -9.81], dt_s: 0.005}",
+                              "gravity tilted towards +y", err))
+      << err;
+  WorldConfig c;
+  ASSERT_TRUE(load_scenario_string("sim: test_falling_sideways\nenv: {name: empty, num_envs: 2}\n", "s.yaml", c, err)) << err;
+  EXPECT_EQ(c.sim.gravity_w[1], 5.0_r);
+  EXPECT_EQ(c.sim.dt_s, 0.005_r);
+  EXPECT_EQ(c.sim.name, "test_falling_sideways");
+  ASSERT_TRUE(register_preset("env", "test_small_forest", "{name: forest, num_envs: 3, curriculum_level: 0.5}", "", err)) << err;
+  ASSERT_TRUE(load_scenario_string("env: test_small_forest\n", "s.yaml", c, err)) << err;
+  EXPECT_EQ(c.env.num_envs, 3);
+  EXPECT_FALSE(c.env.assets.empty());  // the forest's trees came with the base
+  // Refusals name what was wrong and register nothing.
+  EXPECT_FALSE(register_preset("sim", "test_falling_sideways", "base_sim", "", err));
+  EXPECT_NE(err.find("the name is taken"), std::string::npos) << err;
+  EXPECT_FALSE(register_preset("sim", "test_bad_dt", "{name: base_sim, dt_s: 5}", "", err));
+  EXPECT_NE(err.find("register sim \"test_bad_dt\": sim.dt_s: expected a number in [1e-06, 1]"), std::string::npos) << err;
+  EXPECT_FALSE(load_scenario_string("sim: test_bad_dt\n", "s.yaml", c, err));
+  EXPECT_FALSE(register_preset("gizmo", "x", "{}", "", err));
+  EXPECT_NE(err.find("kind: expected one of sim, env, robot"), std::string::npos) << err;
+}

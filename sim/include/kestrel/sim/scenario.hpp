@@ -25,6 +25,15 @@ namespace kestrel::sim {
 [[nodiscard]] bool load_scenario_string(const std::string& text, const std::string& source_name, WorldConfig& out,
                                         std::string& error);
 
+/// Registers a preset at run time (Aerial Gym's register_sim / register_env / register_robot ...):
+/// `kind` is one of sim, env, robot, controller, sensor, task, simulator; `section_yaml` is what a
+/// scenario's section of that kind holds (a registry name, or a map with `name` = the base preset
+/// and overrides of its fields, read through the schema: sim/schema.hpp), evaluated now; scenarios
+/// can then name it. False and a message naming the kind, the name and the field (nothing
+/// registered) on a bad kind, a taken or empty name, or a bad section.
+[[nodiscard]] bool register_preset(const std::string& kind, const std::string& name, const std::string& section_yaml,
+                                   const std::string& description, std::string& error);
+
 /// The embedded default scenario: 1024 base quadrotors flying position setpoints through the forest.
 const char* default_scenario_yaml();
 
