@@ -62,6 +62,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/layout.hpp"
+#include "kestrel/sim/schema.hpp"
 #include "../scene/episode_draw.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
@@ -244,6 +245,7 @@ class PlanarSimulator final : public Simulator {
     {
       std::string lerr;
       if (!check_config_limits(c, lerr)) return bad(lerr);
+      if (!check_config_fields(c, lerr)) return bad(lerr);  // the schema's ranges (sim/schema.hpp)
       long long slots = 0;
       for (const AssetClass& a : e.assets) slots += asset_class_slots(a);
       // Per environment: the step arena, ~1 KiB of Box2D body and fixture per obstacle and robot

@@ -9,6 +9,7 @@
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/mesh.hpp"
 #include "kestrel/sim/robot_model.hpp"
+#include "kestrel/sim/schema.hpp"
 #include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/world_data.hpp"
 #include "kestrel/sim/world_model.hpp"
@@ -281,6 +282,9 @@ bool validate(const WorldConfig& config, std::string& error) {
     return fail("task.placement_attempts: expected an integer in [1, " + std::to_string(kMaxPlacementAttempts) + "]");
   if (!(config.task.clearance_m >= 0)) return fail("task.clearance_m: expected a number >= 0");
   if (!(config.task.setpoint_speed_m_s >= 0)) return fail("task.setpoint_speed_m_s: expected a number >= 0");
+  // Every field within the range its schema allows (sim/schema.hpp): what a scenario file could
+  // not hold cannot arrive through a config built in code either.
+  if (!check_config_fields(config, error)) return false;
   // Upper bounds of every count (sim/limits.hpp), then the memory the world will need, before
   // any of it is allocated: a bad count is a message naming the field, not std::bad_alloc.
   {

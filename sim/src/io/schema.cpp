@@ -160,7 +160,7 @@ const Schema<SimulatorConfig>& simulator_schema() {
       real_f<S>("max_steering_rad", &S::max_steering_rad, "rad", 1e-3, 1.4, "ground vehicle: steering angle limit"),
       real_f<S>("altitude_m", &S::altitude_m, "m", -1e4, 1e4, "planar multirotor: the held flight height"),
       int_f<S>("lidar_beams", &S::lidar_beams, 0, kNoMax, nullptr, "planar 2-D lidar beams (0: none)"),
-      real_f<S>("lidar_fov_rad", &S::lidar_fov_rad, "rad", 1e-3, 6.2831853, "planar lidar field of view, centred on body x"),
+      real_f<S>("lidar_fov_rad", &S::lidar_fov_rad, "rad", 1e-3, static_cast<double>(kTwoPi), "planar lidar field of view, centred on body x"),
       real_f<S>("lidar_max_range_m", &S::lidar_max_range_m, "m", 1e-3, 1e4, "planar lidar maximum range"),
       real_f<S>("max_push_vel_xy_m_s", &S::max_push_vel_xy_m_s, "m/s", 0, 100, "push_robots: v_x, v_y drawn in [-max, max]"),
       real_f<S>("com_bias_max_m", &S::com_bias_max_m, "m", 0, 10, "planar: centre-of-mass offset x, y drawn in [-max, max]"),
@@ -290,7 +290,7 @@ const Schema<RobotConfig>& robot_schema() {
       vec3_f<S>("quadratic_angular_drag_b", &S::quadratic_angular_drag_b, "N m s^2", "quadratic angular drag, body frame"),
       vec3_f<S>("min_init_position_ratio", &S::min_init_position_ratio, "", "start drawn in [min, max] x (upper - lower) from the lower bound"),
       vec3_f<S>("max_init_position_ratio", &S::max_init_position_ratio, "", ""),
-      real_f<S>("max_init_yaw_rad", &S::max_init_yaw_rad, "rad", 0, 3.14159265358979, "start yaw drawn in [-max, max]"),
+      real_f<S>("max_init_yaw_rad", &S::max_init_yaw_rad, "rad", 0, static_cast<double>(kPi), "start yaw drawn in [-max, max]"),
       bool_f<S>("use_desaturation", &S::use_desaturation, "sequential desaturation (false: Aerial Gym's clamped pseudo-inverse)"),
   };
   static const StructuralKey st[] = {
@@ -346,6 +346,8 @@ const Schema<TaskConfig>& task_schema() {
 namespace {
 
 std::string num(double v) {
+  // Whole numbers in full (1048576, not 1.04858e+06): limits are read and compared by people.
+  if (v == static_cast<double>(static_cast<long long>(v)) && v > -1e15 && v < 1e15) return std::to_string(static_cast<long long>(v));
   std::ostringstream s;
   s << v;
   return s.str();
@@ -402,6 +404,64 @@ void document(std::ostringstream& out, const Schema<S>& sc) {
 }
 
 }  // namespace
+
+namespace {
+
+template <class S>
+bool check_fields(const Schema<S>& sc, const S& s, const std::string& where, std::string& error) {
+  auto fail = [&](const Field<S>& f, const std::string& what) {
+    error = where + "." + f.key + ": " + what;
+    return false;
+  };
+  for (std::size_t k = 0; k < sc.count; ++k) {
+    const Field<S>& f = sc.fields[k];
+    switch (f.type) {
+      case FieldType::real_number: {
+        const double v = static_cast<double>(s.*f.r);
+        if (!(v >= f.lo && v <= f.hi)) return fail(f, "expected a number in [" + num(f.lo) + ", " + num(f.hi) + "], got " + num(v));
+        break;
+      }
+      case FieldType::integer: {
+        const int v = s.*f.i;
+        if (v < f.lo || (f.hi >= f.lo && v > f.hi))
+          return fail(f, f.hi < f.lo ? "expected an integer >= " + num(f.lo) + ", got " + std::to_string(v)
+                                     : "expected an integer in [" + num(f.lo) + ", " + num(f.hi) + "]" +
+                                           (f.limit ? std::string(" (") + f.limit + ")" : "") + ", got " + std::to_string(v));
+        break;
+      }
+      case FieldType::vec3: {
+        const Vec3& v = s.*f.v;
+        for (int i = 0; i < 3; ++i)
+          if (!(static_cast<double>(v[i]) >= f.lo && static_cast<double>(v[i]) <= f.hi))
+            return fail(f, "expected finite numbers in [" + num(f.lo) + ", " + num(f.hi) + "], got " + num(static_cast<double>(v[i])) +
+                               " at [" + std::to_string(i) + "]");
+        break;
+      }
+      case FieldType::range: {
+        const double a = static_cast<double>(s.*f.r), b = static_cast<double>(s.*f.r_max);
+        if (!(a >= f.lo && b <= f.hi && a <= b))
+          return fail(f, "expected [min, max] with " + num(f.lo) + " <= min <= max <= " + num(f.hi) + ", got [" + num(a) + ", " + num(b) + "]");
+        break;
+      }
+      case FieldType::boolean:
+      case FieldType::choice: break;  // any value of the type is allowed
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool check_config_fields(const WorldConfig& c, std::string& error) {
+  if (!check_fields(sim_schema(), c.sim, "sim", error) || !check_fields(simulator_schema(), c.simulator, "simulator", error) ||
+      !check_fields(env_schema(), c.env, "env", error) || !check_fields(terrain_schema(), c.env.terrain, "env.terrain", error) ||
+      !check_fields(robot_schema(), c.robot, "robot", error) || !check_fields(shape_schema(), c.robot.shape, "robot.collision_shape", error) ||
+      !check_fields(task_schema(), c.task, "task", error))
+    return false;
+  for (const AssetClass& a : c.env.assets)
+    if (!check_fields(asset_schema(), a, "env.assets." + a.name, error)) return false;
+  return true;
+}
 
 std::string scenario_reference_markdown() {
   std::ostringstream out;

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/world.hpp"
 
@@ -114,14 +116,14 @@ TEST(SimScenario, WorldCreateChecksTheBoundsOfConfigsBuiltInCode) {
   WorldConfig c;
   c.env.num_envs = 1;
   c.robot.robots_per_env = 2000000000;
-  EXPECT_EQ(refused(c), "robot.robots_per_env: 2000000000 is out of range; allowed: 1..1024 (kMaxRobotsPerEnv)");
+  EXPECT_EQ(refused(c), "robot.robots_per_env: expected an integer in [1, 1024] (kMaxRobotsPerEnv), got 2000000000");
   c = WorldConfig();
   c.env.num_envs = 1;
   c.sim.substeps = 2000000000;
-  EXPECT_EQ(refused(c), "sim.substeps: 2000000000 is out of range; allowed: 1..1000 (kMaxSubsteps)");
+  EXPECT_EQ(refused(c), "sim.substeps: expected an integer in [1, 1000] (kMaxSubsteps), got 2000000000");
   c = WorldConfig();
   c.env.num_envs = 1 << 30;
-  EXPECT_EQ(refused(c), "env.num_envs: 1073741824 is out of range; allowed: 1..1048576 (kMaxNumEnvs)");
+  EXPECT_EQ(refused(c), "env.num_envs: expected an integer in [1, 1048576] (kMaxNumEnvs), got 1073741824");
   c = WorldConfig();
   c.env.num_envs = 1;
   AssetClass t;
@@ -131,11 +133,21 @@ TEST(SimScenario, WorldCreateChecksTheBoundsOfConfigsBuiltInCode) {
   t.min_num_assets = 0;
   c.env.assets.push_back(t);
   EXPECT_EQ(asset_class_slots(t), 2147483647);  // saturated, never negative (was signed overflow)
-  EXPECT_EQ(refused(c), "env.assets.t.num_assets: 600000000 is out of range; allowed: 0..65536 (kMaxAssetsPerClass)");
+  EXPECT_EQ(refused(c), "env.assets.t.num_assets: expected an integer in [0, 65536] (kMaxAssetsPerClass), got 600000000");
   c = WorldConfig();
   c.env.num_envs = 1;
   c.env.max_latency_physics_steps = 2147483647;  // rng % (max + 1) overflowed
-  EXPECT_EQ(refused(c), "env.max_latency_physics_steps: 2147483647 is out of range; allowed: 0..1000 (kMaxLatencyPhysicsSteps)");
+  EXPECT_EQ(refused(c), "env.max_latency_physics_steps: expected an integer in [0, 1000] (kMaxLatencyPhysicsSteps), got 2147483647");
+  // The schema's ranges hold for code-built configs too (sim/schema.hpp check_config_fields),
+  // fields the World never checked itself included: a NaN friction or disturbance limit.
+  c = WorldConfig();
+  c.env.num_envs = 1;
+  c.sim.friction_coefficient = std::numeric_limits<real>::quiet_NaN();
+  EXPECT_EQ(refused(c), "sim.friction_coefficient: expected a number in [0, 100], got nan");
+  c = WorldConfig();
+  c.env.num_envs = 1;
+  c.env.max_force_disturbance_N[1] = std::numeric_limits<real>::infinity();
+  EXPECT_EQ(refused(c).find("env.max_force_disturbance_N: expected finite numbers in [-1000000000, 1000000000], got inf at [1]"), 0u);
 }
 
 // Set-up estimates the memory a world needs before allocating any of it, and refuses beyond

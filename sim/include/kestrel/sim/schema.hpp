@@ -63,6 +63,13 @@ const Schema<ShapeSpec>& shape_schema();
 const Schema<ControllerConfig>& controller_schema();
 const Schema<TaskConfig>& task_schema();
 
+/// The same ranges for a config built in code (C++, tests) rather than read from a file: every
+/// field of every schema within its allowed values, vectors finite, ranges ordered; assets and
+/// their classes included. False and a message naming section.key and the allowed values. Both
+/// backends call it when they are built, so a value a scenario file could not hold cannot reach a
+/// world by another road.
+[[nodiscard]] bool check_config_fields(const WorldConfig& config, std::string& error);
+
 /// The scenario reference in Markdown: per section, every key with its unit, type, allowed values,
 /// default (the struct's, before a registry preset) and documentation.
 std::string scenario_reference_markdown();
