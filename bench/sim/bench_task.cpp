@@ -3,7 +3,7 @@
 // figure a learner's rollout sees; bench_sim measures the World alone. Timings are reported,
 // never asserted (the smoke test only checks that it runs).
 //
-//   kestrel_bench_task [--quick] [--reps N]
+//   kestrel_bench_task [--quick] [--reps N] [--only SUBSTRING]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -66,11 +66,13 @@ double run_case(const Case& c, int threads, int reps, bool quick) {
 int main(int argc, char** argv) {
   bool quick = false;
   int reps = 3;
+  const char* only = nullptr;  // run the cases whose "task,controller,backend" contains this
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) quick = true;
     else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
+    else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: kestrel_bench_task [--quick] [--reps N]\n");
+      std::fprintf(stderr, "usage: kestrel_bench_task [--quick] [--reps N] [--only SUBSTRING]\n");
       return 2;
     }
   }
@@ -85,6 +87,8 @@ int main(int argc, char** argv) {
   std::printf("task,controller,backend,envs,threads,ns_per_env_step\n");
   for (const Case& c : cases)
     for (int threads : {1, 2}) {
+      const std::string id = std::string(c.task) + "," + c.controller + "," + backend_name(c.backend);
+      if (only != nullptr && id.find(only) == std::string::npos) continue;
       const double ns = run_case(c, threads, quick ? 1 : reps, quick);
       if (ns < 0) return 1;
       std::printf("%s,%s,%s,%d,%d,%.1f\n", c.task, c.controller, backend_name(c.backend), quick ? 8 : c.envs, threads, ns);

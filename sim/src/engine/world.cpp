@@ -10,6 +10,7 @@
 namespace kestrel::sim {
 
 namespace {
+constexpr int kHookChunkEnvs = 64;  // a multiple of batch::kLanes; ~40 KB of robot rows
 void world_task(void* context, int worker) { static_cast<World*>(context)->run_slice(worker); }
 }  // namespace
 
@@ -49,11 +50,21 @@ void World::run_slice(int worker) {
   const int begin = static_cast<int>(static_cast<long long>(n) * worker / t);
   const int end = static_cast<int>(static_cast<long long>(n) * (worker + 1) / t);
   for (int s = 0; s < pending_steps_; ++s) {
-    // Batched twin (step_batched.cpp): whole groups of batch::kLanes environments, bit-identical.
-    int env = batch_ ? stage::env_steps_batched(model_, data_, begin, end) : begin;
-    for (; env < end; ++env) stage::env_step(model_, data_, env);
+    // With an after-step hook, the last env-step runs in chunks of kHookChunkEnvs and the hook
+    // reads each chunk's rows right after they were written, while they are still in cache (a
+    // worker's slice of 4096 robots does not fit in L2). Environments are independent, so the
+    // chunking changes no result.
+    const bool hook = after_step_ != nullptr && s + 1 == pending_steps_;
+    const int chunk = hook ? kHookChunkEnvs : end - begin;
+    for (int b = begin; b < end; b += chunk) {
+      const int e = std::min(end, b + chunk);
+      // Batched twin (step_batched.cpp): whole groups of batch::kLanes environments, bit-identical.
+      int env = batch_ ? stage::env_steps_batched(model_, data_, b, e) : b;
+      for (; env < e; ++env) stage::env_step(model_, data_, env);
+      if (hook) after_step_(after_step_context_, b, e);
+    }
   }
-  if (after_step_ != nullptr) after_step_(after_step_context_, begin, end);
+  if (after_step_ != nullptr && pending_steps_ == 0) after_step_(after_step_context_, begin, end);
 }
 
 void World::step(int num_env_steps) {
