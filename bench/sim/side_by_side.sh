@@ -1,0 +1,40 @@
+#!/bin/sh
+# Side by side: the harness bench (kestrel_bench_sim) and the task bench (kestrel_bench_task) of a
+# base commit and of this tree, in interleaved pairs pinned to two cores, in one run (issue 10:
+# "measured side by side against the commit before the redesign"). Timings are figures, never
+# assertions.
+#
+#   bench/sim/side_by_side.sh BASE_COMMIT [PAIRS] [OUT_DIR]
+#
+# Builds BASE in a git worktree under build/side_by_side/ (bench targets only; a base without
+# bench_task.cpp gets today's copy), then writes OUT_DIR/harness.csv and OUT_DIR/task.csv with one
+# row per (side, pair, case) and OUT_DIR/summary.csv with medians and best-of ratios
+# (bench/sim/side_by_side_summary.py). The figures in bench/results/device/ were taken this way on
+# the device machine (16-core Xeon, binaries and their shared libraries copied there).
+set -eu
+base=${1:?usage: side_by_side.sh BASE_COMMIT [PAIRS] [OUT_DIR]}
+pairs=${2:-10}
+out=${3:-build/side_by_side/out}
+root=$(cd "$(dirname "$0")/../.." && pwd)
+cd "$root"
+wt=build/side_by_side/base
+mkdir -p build/side_by_side "$out"
+[ -d "$wt" ] || git worktree add --detach "$wt" "$base"
+[ -f "$wt/bench/sim/bench_task.cpp" ] || { cp bench/sim/bench_task.cpp "$wt/bench/sim/"; printf '%s\n' \
+  'add_executable(kestrel_bench_task bench_task.cpp)' 'target_link_libraries(kestrel_bench_task PRIVATE kestrel_sim kestrel_flags)' \
+  >> "$wt/bench/sim/CMakeLists.txt"; }
+(cd "$wt" && cmake --preset host >/dev/null && cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task)
+cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task
+pin="taskset -c 0,1"
+command -v taskset >/dev/null || pin=""
+echo "side,pair,case,envs,threads,env_steps_per_s,ns_per_env_step,note" > "$out/harness.csv"
+echo "side,pair,task,controller,backend,envs,threads,ns_per_env_step" > "$out/task.csv"
+for i in $(seq 1 "$pairs"); do
+  for side in base now; do
+    dir=$([ "$side" = base ] && echo "$wt/build/host" || echo build/host)
+    $pin "$dir/bench/sim/kestrel_bench_sim" --quick --reps 7 --csv "$out/r.csv" >/dev/null
+    tail -n +2 "$out/r.csv" | sed "s/^/$side,$i,/" >> "$out/harness.csv"
+    $pin "$dir/bench/sim/kestrel_bench_task" --reps 2 | grep -E '^[a-z_]+,' | grep -v '^task,' | sed "s/^/$side,$i,/" >> "$out/task.csv"
+  done
+done
+python3 bench/sim/side_by_side_summary.py "$out"
