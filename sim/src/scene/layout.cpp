@@ -10,6 +10,8 @@ namespace kestrel::sim {
 
 using scene::uniform_vec;
 
+// Long on purpose: one switch over the asset kinds, and the order of its draws is part of the
+// determinism contract (every hash depends on it), so it reads top to bottom in one place.
 int generate_layout(const WorldConfig& cfg, real level, const Vec3& lower_w, const Vec3& upper_w, RngStream& rng,
                     const std::vector<std::vector<Vec3>>* mesh_vertices, LayoutSink sink, void* context) {
   const Vec3 lo = lower_w, hi = upper_w, span = hi - lo;

@@ -280,6 +280,8 @@ bool Terrain::build(const TerrainConfig& config, std::uint64_t seed, std::unique
   return true;
 }
 
+// Long on purpose: one branch per height source (list, image, each procedural generator), each
+// short and validated where it reads its fields; the generators share the grid set-up above them.
 bool Terrain::build_heightfield(const TerrainConfig& c, std::uint64_t seed, std::string& error) {
   auto fail = [&](const std::string& field, const std::string& msg) {
     error = where(c, field) + msg;
