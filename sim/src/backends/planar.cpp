@@ -211,6 +211,80 @@ real clearance_to_slot(const Slot& s, real x, real y) {
   return std::sqrt(ox * ox + oy * oy) + std::min(std::max(qx, qy), 0_r);  // signed distance to a box
 }
 
+/// What the plane can carry, checked before anything is built: the counts and ranges every
+/// backend checks, the planar backend's own limits (2-D sensors and terrain, no spinning, moving or
+/// mesh obstacles, randomisation ranges), and the memory estimate. False and the message (without
+/// the "simulator planar: " prefix) for the first problem.
+bool validate_planar_config(const WorldConfig& c, std::string& error) {
+  auto fail = [&](const std::string& m) {
+    error = m;
+    return false;
+  };
+  const SimulatorConfig& sc = c.simulator;
+  const EnvConfig& e = c.env;
+  if (e.num_envs < 1) return fail("env.num_envs: expected a positive integer");
+  if (c.robot.robots_per_env < 1) return fail("robot.robots_per_env: expected a positive integer");
+  if (!(c.sim.dt_s > 0)) return fail("sim.dt_s: expected a positive number");
+  if (c.num_threads < 1) return fail("threads: expected a positive integer");
+  if (c.task.episode_len_env_steps < 1) return fail("task.episode_len_env_steps: expected a positive integer");
+  if (!(e.num_physics_steps_per_env_step_mean >= 1)) return fail("env.num_physics_steps_per_env_step_mean: expected >= 1");
+  if (c.task.placement_attempts < 1 || c.task.placement_attempts > kMaxPlacementAttempts)
+    return fail("task.placement_attempts: expected an integer in [1, " + std::to_string(kMaxPlacementAttempts) + "]");
+  if (!c.robot.sensors.empty())
+    return fail("robot sensors (" + c.robot.sensors.front().name +
+               ") render 3-D scenes; planar has a 2-D lidar (simulator.lidar_beams); use simulator: rigid for 3-D sensors");
+  if (e.sample_timestep_for_latency || e.num_physics_steps_per_env_step_std != 0 || e.perturb_observations || e.enable_disturbance)
+    return fail("latency sampling, random physics-step counts, observation noise and disturbances are rigid-only; use simulator: rigid");
+  if (!(sc.max_push_vel_xy_m_s >= 0) || !(sc.added_mass_min_kg <= sc.added_mass_max_kg) || !(sc.motor_scale_min > 0) ||
+      !(sc.motor_scale_min <= sc.motor_scale_max) || !(sc.gain_scale_min > 0) || !(sc.gain_scale_min <= sc.gain_scale_max) ||
+      !(sc.com_bias_max_m >= 0) || !(c.robot.mass_kg + sc.added_mass_min_kg > 0))
+    return fail("simulator: randomisation ranges need min <= max, scales > 0, com_bias_max_m >= 0 and a positive total mass");
+  if (sc.lidar_beams < 0 || sc.lidar_beams > 4096 || !(sc.lidar_max_range_m > 0) || !(sc.lidar_fov_rad > 0 && sc.lidar_fov_rad <= kTwoPi))
+    return fail("simulator.lidar_*: expected 0..4096 beams, a positive range and a field of view in (0, 2 pi]");
+  // Upper bounds of every count (sim/limits.hpp) and the memory estimate, before allocating.
+  {
+    std::string lerr;
+    if (!check_config_limits(c, lerr)) return fail(lerr);
+    if (!check_config_fields(c, lerr)) return fail(lerr);  // the schema's ranges (sim/schema.hpp)
+    long long slots = 0;
+    for (const AssetClass& a : e.assets) slots += asset_class_slots(a);
+    // Per environment: the step arena, ~1 KiB of Box2D body and fixture per obstacle and robot
+    // (generous), per robot the controller/allocator/motor state, the views and the lidar.
+    const double per_robot = sizeof(ControllerState) + sizeof(VelocitySteeringState) + sizeof(al::AllocatorState) +
+                             sizeof(al::MotorModelState) + 1024.0 + 64.0 * sizeof(real) + 4.0 * sc.lidar_beams;
+    const double per_env = static_cast<double>(kStepArenaBytes) + 1024.0 * static_cast<double>(slots) +
+                           per_robot * c.robot.robots_per_env;
+    const double need = per_env * e.num_envs, gib = 1024.0 * 1024.0 * 1024.0;
+    if (need > c.max_memory_gib * gib) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "memory: this world needs about %.3g GiB (%d envs), more than max_memory_gib = %.4g GiB; allowed: up to "
+                    "max_memory_gib (scenario `max_memory_gib` or kestrel run --max-memory-gib); reduce env.num_envs or the counts",
+                    need / gib, e.num_envs, c.max_memory_gib);
+      return fail(buf);
+    }
+  }
+  if (e.terrain.type == TerrainType::heightfield)
+    return fail("env.terrain: a height field is 3-D ground the plane cannot represent; use simulator: rigid");
+  if (e.terrain.type == TerrainType::trimesh)
+    return fail("env.terrain: triangle-mesh terrain is 3-D ground the plane cannot represent; use simulator: rigid");
+  if (e.terrain.measure_heights) return fail("env.terrain.measure_heights: no heights on a plane; use simulator: rigid");
+  for (const AssetClass& a : e.assets) {
+    if (a.max_angular_speed_rad_s > 0)
+      return fail("env.assets." + a.name + ": spinning obstacles are rigid-only; use simulator: rigid");
+    if (a.kind == AssetKind::mesh)
+      return fail("env.assets." + a.name + ": 3-D mesh obstacles are not supported (circles and boxes only); use simulator: rigid");
+    if (a.max_speed_m_s > 0) return fail("env.assets." + a.name + ": moving obstacles are rigid-only; use simulator: rigid");
+    if (a.num_assets < 0 || a.min_num_assets < 0 || a.min_num_assets > a.num_assets)
+      return fail("env.assets." + a.name + ": expected 0 <= min_num_assets <= num_assets");
+  }
+  for (int i = 0; i < 2; ++i)
+    if (!(e.lower_bound_min_m[i] <= e.lower_bound_max_m[i] && e.upper_bound_min_m[i] <= e.upper_bound_max_m[i] &&
+          e.lower_bound_max_m[i] < e.upper_bound_min_m[i]))
+      return fail("env bounds: expected lower_bound_min <= lower_bound_max < upper_bound_min <= upper_bound_max on x and y");
+  return true;
+}
+
 class PlanarSimulator final : public Simulator {
  public:
   PlanarSimulator() : Simulator(Backend::planar) {}
@@ -220,68 +294,8 @@ class PlanarSimulator final : public Simulator {
       error = "simulator planar: " + m;
       return false;
     };
+    if (std::string why; !validate_planar_config(c, why)) return bad(why);
     const SimulatorConfig& sc = c.simulator;
-    const EnvConfig& e = c.env;
-    if (e.num_envs < 1) return bad("env.num_envs: expected a positive integer");
-    if (c.robot.robots_per_env < 1) return bad("robot.robots_per_env: expected a positive integer");
-    if (!(c.sim.dt_s > 0)) return bad("sim.dt_s: expected a positive number");
-    if (c.num_threads < 1) return bad("threads: expected a positive integer");
-    if (c.task.episode_len_env_steps < 1) return bad("task.episode_len_env_steps: expected a positive integer");
-    if (!(e.num_physics_steps_per_env_step_mean >= 1)) return bad("env.num_physics_steps_per_env_step_mean: expected >= 1");
-    if (c.task.placement_attempts < 1 || c.task.placement_attempts > kMaxPlacementAttempts)
-      return bad("task.placement_attempts: expected an integer in [1, " + std::to_string(kMaxPlacementAttempts) + "]");
-    if (!c.robot.sensors.empty())
-      return bad("robot sensors (" + c.robot.sensors.front().name +
-                 ") render 3-D scenes; planar has a 2-D lidar (simulator.lidar_beams); use simulator: rigid for 3-D sensors");
-    if (e.sample_timestep_for_latency || e.num_physics_steps_per_env_step_std != 0 || e.perturb_observations || e.enable_disturbance)
-      return bad("latency sampling, random physics-step counts, observation noise and disturbances are rigid-only; use simulator: rigid");
-    if (!(sc.max_push_vel_xy_m_s >= 0) || !(sc.added_mass_min_kg <= sc.added_mass_max_kg) || !(sc.motor_scale_min > 0) ||
-        !(sc.motor_scale_min <= sc.motor_scale_max) || !(sc.gain_scale_min > 0) || !(sc.gain_scale_min <= sc.gain_scale_max) ||
-        !(sc.com_bias_max_m >= 0) || !(c.robot.mass_kg + sc.added_mass_min_kg > 0))
-      return bad("simulator: randomisation ranges need min <= max, scales > 0, com_bias_max_m >= 0 and a positive total mass");
-    if (sc.lidar_beams < 0 || sc.lidar_beams > 4096 || !(sc.lidar_max_range_m > 0) || !(sc.lidar_fov_rad > 0 && sc.lidar_fov_rad <= kTwoPi))
-      return bad("simulator.lidar_*: expected 0..4096 beams, a positive range and a field of view in (0, 2 pi]");
-    // Upper bounds of every count (sim/limits.hpp) and the memory estimate, before allocating.
-    {
-      std::string lerr;
-      if (!check_config_limits(c, lerr)) return bad(lerr);
-      if (!check_config_fields(c, lerr)) return bad(lerr);  // the schema's ranges (sim/schema.hpp)
-      long long slots = 0;
-      for (const AssetClass& a : e.assets) slots += asset_class_slots(a);
-      // Per environment: the step arena, ~1 KiB of Box2D body and fixture per obstacle and robot
-      // (generous), per robot the controller/allocator/motor state, the views and the lidar.
-      const double per_robot = sizeof(ControllerState) + sizeof(VelocitySteeringState) + sizeof(al::AllocatorState) +
-                               sizeof(al::MotorModelState) + 1024.0 + 64.0 * sizeof(real) + 4.0 * sc.lidar_beams;
-      const double per_env = static_cast<double>(kStepArenaBytes) + 1024.0 * static_cast<double>(slots) +
-                             per_robot * c.robot.robots_per_env;
-      const double need = per_env * e.num_envs, gib = 1024.0 * 1024.0 * 1024.0;
-      if (need > c.max_memory_gib * gib) {
-        char buf[400];
-        std::snprintf(buf, sizeof buf,
-                      "memory: this world needs about %.3g GiB (%d envs), more than max_memory_gib = %.4g GiB; allowed: up to "
-                      "max_memory_gib (scenario `max_memory_gib` or kestrel run --max-memory-gib); reduce env.num_envs or the counts",
-                      need / gib, e.num_envs, c.max_memory_gib);
-        return bad(buf);
-      }
-    }
-    if (e.terrain.type == TerrainType::heightfield)
-      return bad("env.terrain: a height field is 3-D ground the plane cannot represent; use simulator: rigid");
-    if (e.terrain.type == TerrainType::trimesh)
-      return bad("env.terrain: triangle-mesh terrain is 3-D ground the plane cannot represent; use simulator: rigid");
-    if (e.terrain.measure_heights) return bad("env.terrain.measure_heights: no heights on a plane; use simulator: rigid");
-    for (const AssetClass& a : e.assets) {
-      if (a.max_angular_speed_rad_s > 0)
-        return bad("env.assets." + a.name + ": spinning obstacles are rigid-only; use simulator: rigid");
-      if (a.kind == AssetKind::mesh)
-        return bad("env.assets." + a.name + ": 3-D mesh obstacles are not supported (circles and boxes only); use simulator: rigid");
-      if (a.max_speed_m_s > 0) return bad("env.assets." + a.name + ": moving obstacles are rigid-only; use simulator: rigid");
-      if (a.num_assets < 0 || a.min_num_assets < 0 || a.min_num_assets > a.num_assets)
-        return bad("env.assets." + a.name + ": expected 0 <= min_num_assets <= num_assets");
-    }
-    for (int i = 0; i < 2; ++i)
-      if (!(e.lower_bound_min_m[i] <= e.lower_bound_max_m[i] && e.upper_bound_min_m[i] <= e.upper_bound_max_m[i] &&
-            e.lower_bound_max_m[i] < e.upper_bound_min_m[i]))
-        return bad("env bounds: expected lower_bound_min <= lower_bound_max < upper_bound_min <= upper_bound_max on x and y");
 
     ground_ = sc.vehicle == PlanarVehicle::ground_vehicle || (sc.vehicle == PlanarVehicle::automatic && c.robot.kind == robots::RobotKind::ground_vehicle);
     ground_vehicle_ = ground_;
