@@ -6,7 +6,8 @@
 (`kestrel train` is the package's console command, kestrel.cli; `python -m kestrel.train` is the same)
 
 (that task's defaults: _TASK_DEFAULTS below; 100 % success after 1.7 M env-steps, 14 s of training
-on 2 cores, bench/results/python/README.md)
+on 2 cores, bench/results/python/README.md; Kestrel-PositionSetpointMotors-v0, direct motor
+commands: 95 % after 2.9 M env-steps, 38 s)
 
 Every --eval-every env-steps (and at the end) the deterministic policy is evaluated on
 --eval-episodes episodes of a separate env seeded with --eval-seed (never a training seed): one
@@ -245,14 +246,18 @@ class Learner:
         from . import export
 
         scale = self.env.action_scale
+        offset = self.env.action_offset
         if self.kind == "rsl_rl":
             space = self.env.single_action_space
-            return export.from_rsl_rl(self.runner.alg.save()["actor_state_dict"], space.low, space.high, activation="elu",
+            spec = export.from_rsl_rl(self.runner.alg.save()["actor_state_dict"], space.low, space.high, activation="elu",
                                       squash="tanh" if self.squash else "none", action_scale=scale,
                                       obs_normalizer=bool(self.obs_norm))
-        spec = export.from_sb3(self.model, self.venv)
-        if scale is not None:
-            spec.action_scale = np.asarray(scale, np.float32)
+        else:
+            spec = export.from_sb3(self.model, self.venv)
+            if scale is not None:
+                spec.action_scale = np.asarray(scale, np.float32)
+        if offset is not None:
+            spec.action_offset = np.asarray(offset, np.float32)
         return spec
 
     def save(self, path: str) -> None:
@@ -289,6 +294,10 @@ def plot(rows: list[dict], path: str, title: str) -> None:
     plt.close(fig)
 
 
+# Hover thrust per motor of base_quadrotor: 0.25 kg x 9.81 m/s^2 / 4 (the thrust the World resets
+# the motors to).
+_HOVER_N = 0.25 * 9.81 / 4
+
 # Normalised action spaces the trainer uses by default. Kestrel-PositionSetpoint-v0 (Lee velocity
 # control): the task clips actions to +-10 (m/s, rad/s); a unit-std initial Gaussian over that
 # range and a policy that must hold a hover to within 0.3 m learnt to fly towards the target but
@@ -297,9 +306,20 @@ def plot(rows: list[dict], path: str, title: str) -> None:
 # scaled to +-2 m/s and +-1 rad/s of yaw rate (Aerial Gym's action transformation).
 _AUTO_ACTION_SCALE: dict[str, list[float]] = {
     "Kestrel-PositionSetpoint-v0": [2.0, 2.0, 2.0, 1.0],
+    # Direct motor commands (base_quadrotor: 0.25 kg, 4 motors clamped to [0, 2] N). The task takes
+    # thrusts in N, clipped to +-10, so a zero action is motors off (the robot falls) and a
+    # Gaussian around it is at or below 0 N half the time. The learner acts in [-1, 1]
+    # mapped to hover +- hover (offset below): [0, 1.226] N per motor, thrust-to-weight 0-2, and
+    # the zero action is hover thrust (no dead zone below 0 N where the gradient vanishes).
+    "Kestrel-PositionSetpointMotors-v0": [_HOVER_N] * 4,
+}
+_AUTO_ACTION_OFFSET: dict[str, list[float]] = {
+    "Kestrel-PositionSetpointMotors-v0": [_HOVER_N] * 4,
 }
 
-_VEHICLE_FRAME_OBS = {"Kestrel-PositionSetpoint-v0"}
+# Motors: yaw is not held by a controller (the start yaw is drawn in +-pi), so the target in the
+# vehicle frame spares the network the rotation by yaw (linear and angular velocity are body-frame).
+_VEHICLE_FRAME_OBS = {"Kestrel-PositionSetpoint-v0", "Kestrel-PositionSetpointMotors-v0"}
 
 # Defaults of the options left unset on the command line (help: "None" = these).
 _GENERIC_DEFAULTS = {"envs": 4096, "steps": 20_000_000, "eval_every": 2_000_000, "rollout": 24, "gamma": 0.99,
@@ -320,6 +340,20 @@ _TASK_DEFAULTS: dict[str, dict] = {
     "Kestrel-PositionSetpoint-v0": {"envs": 256, "steps": 4_000_000, "eval_every": 250_000, "rollout": 16,
                                     "gamma": 0.96, "obs_norm": 0, "squash": 1, "action_repeat": 10,
                                     "shaping": 300.0, "init_std": 1.0},
+    # Direct motor commands (end-to-end; issue 11): the velocity defaults above with what an
+    # attitude loop the policy must now close itself needs (bench/results/python/README.md):
+    # - actions around hover thrust (_AUTO_ACTION_SCALE / _AUTO_ACTION_OFFSET) squashed with tanh
+    #   (without the offset, actions [-1, 1] x 2 N clamped to [0, 2] N: 0 % after 6 M env-steps);
+    # - the target in the vehicle frame (_VEHICLE_FRAME_OBS);
+    # - action repeat 2 (50 Hz decisions) with gamma 0.98 per decision (~0.99 per env-step) and
+    #   512 envs x 32 decisions per update: the velocity defaults (10 Hz, 256 x 16, gamma 0.96)
+    #   crashed 74-100 % and never succeeded within 6 M env-steps; 100 Hz (action repeat 1,
+    #   64 decisions, gamma 0.99) reached 8-15 % at 6 M with twice the learner time per env-step;
+    # - the same distance shaping, init std 1.0 and no observation normalisation as the velocity
+    #   task (init std 0.5 took 4.9 M env-steps to 95 % on seeds 0-2, 1.0 took 2.9-3.9 M).
+    "Kestrel-PositionSetpointMotors-v0": {"envs": 512, "steps": 40_000_000, "eval_every": 1_000_000, "rollout": 32,
+                                          "gamma": 0.98, "obs_norm": 0, "squash": 1, "action_repeat": 2,
+                                          "shaping": 300.0, "init_std": 1.0},
 }
 
 
@@ -334,11 +368,12 @@ def _export(learner: Learner, args, overrides: dict) -> dict:
     obs, _ = env.reset(seed=args.eval_seed)
     act = learner.policy()
     scale = 1.0 if env.action_scale is None else env.action_scale
+    offset = 0.0 if env.action_offset is None else env.action_offset
     rows, want = [], []
     for _ in range(4):
         a = act(obs)
         rows.append(np.array(obs, np.float32))
-        want.append(np.asarray(a, np.float32) * scale)
+        want.append(np.asarray(a, np.float32) * scale + offset)
         obs, *_ = env.step(a)
     env.close()
     data, want = np.concatenate(rows), np.concatenate(want)
@@ -387,6 +422,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--action-scale", default="auto",
                    help="normalised actions in [-1, 1] times these (comma list, one or one per action), 'none' for the "
                         "task's own +-10 actions; auto: " + ", ".join(f"{k} {v}" for k, v in _AUTO_ACTION_SCALE.items()))
+    p.add_argument("--action-offset", default="auto",
+                   help="with --action-scale: the env is given offset + scale * a (comma list, 'none' for 0); auto: "
+                        + ", ".join(f"{k} {v}" for k, v in _AUTO_ACTION_OFFSET.items()))
     p.add_argument("--vehicle-frame-obs", choices=["auto", "on", "off"], default="auto",
                    help="position setpoint: target - position rotated into the vehicle frame (auto: on for "
                         + ", ".join(sorted(_VEHICLE_FRAME_OBS)) + ")")
@@ -403,6 +441,12 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         None if args.action_scale.lower() == "none" else [float(x) for x in args.action_scale.split(",")])
     if scale is not None:
         overrides["action_scale"] = scale
+    offset = _AUTO_ACTION_OFFSET.get(args.task) if args.action_offset == "auto" else (
+        None if args.action_offset.lower() == "none" else [float(x) for x in args.action_offset.split(",")])
+    if offset is not None and scale is not None:
+        overrides["action_offset"] = offset
+    else:
+        offset = None
     vframe = args.task in _VEHICLE_FRAME_OBS if args.vehicle_frame_obs == "auto" else args.vehicle_frame_obs == "on"
     if vframe:
         overrides["vehicle_frame_obs"] = True
@@ -501,7 +545,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     plot(rows, os.path.join(args.out, "curves.png"),
          f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
-               "seed": args.seed, "action_scale": scale, "vehicle_frame_obs": vframe, "rollout": args.rollout, "epochs": args.epochs,
+               "seed": args.seed, "action_scale": scale, "action_offset": offset,
+               "action_repeat": args.action_repeat, "shaping": args.shaping, "obs_norm": args.obs_norm, "squash": args.squash,
+               "vehicle_frame_obs": vframe, "rollout": args.rollout, "epochs": args.epochs,
                "minibatches": args.minibatches, "lr": args.lr, "gamma": args.gamma, "init_std": args.init_std,
                "entropy": args.entropy, "reward_scale": args.reward_scale, "eval_seed": args.eval_seed, "eval_episodes": args.eval_episodes,
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),

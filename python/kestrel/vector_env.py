@@ -75,7 +75,8 @@ class KestrelVectorEnv(VectorEnv):
     def __init__(self, task_id: str = "position_setpoint_task", num_envs: int | None = 1024, seed: int = 0,
                  threads: int | None = None, scenario: Any = None, backend: str | None = None,
                  render_mode: str | None = None, autoreset_mode: str | AutoresetMode = AutoresetMode.SAME_STEP,
-                 action_scale: Any = None, vehicle_frame_obs: bool = False, **overrides: Any):
+                 action_scale: Any = None, vehicle_frame_obs: bool = False, action_offset: Any = None,
+                 **overrides: Any):
         names = {"same_step": AutoresetMode.SAME_STEP, "next_step": AutoresetMode.NEXT_STEP,
                  "samestep": AutoresetMode.SAME_STEP, "nextstep": AutoresetMode.NEXT_STEP}
         mode = autoreset_mode if isinstance(autoreset_mode, AutoresetMode) else names.get(str(autoreset_mode).lower())
@@ -109,6 +110,19 @@ class KestrelVectorEnv(VectorEnv):
             self._scaled = np.empty((self.task.num_envs, ad), np.float32)
             bound = 1.0
         self.action_scale = None if self._scale is None else self._scale.copy()
+        # action_offset (with action_scale only, a number or one per action): the task is given
+        # offset + scale * clip(a, -1, 1), so a normalised action of 0 can mean something other
+        # than the task's 0. Direct motor commands: offset = hover thrust per motor, so the zero
+        # action hovers (the task's zero action is motors off: the robot falls).
+        self._offset = None
+        if action_offset is not None:
+            if self._scale is None:
+                raise ValueError("action_offset: only with action_scale (a normalised action space)")
+            off = np.broadcast_to(np.asarray(action_offset, np.float32), (ad,)).copy()
+            if not np.all(np.isfinite(off)):
+                raise ValueError(f"action_offset: expected finite values, got {action_offset!r}")
+            self._offset = off
+        self.action_offset = None if self._offset is None else self._offset.copy()
         # vehicle_frame_obs (opt-in, position setpoint only): observations 0-2 (target - position,
         # world frame) rotated about world z by -yaw into the vehicle frame, the frame in which
         # Lee velocity control reads [vx, vy, vz] (the same rotation as the reward's
@@ -183,6 +197,8 @@ class KestrelVectorEnv(VectorEnv):
             a = self._scaled
             np.clip(actions, -1.0, 1.0, out=a)
             a *= self._scale
+            if self._offset is not None:
+                a += self._offset
             actions = a
         any_ended = self.task.step(actions)
         if self._pending:  # next_step mode: the envs that ended last step start their episode now
@@ -228,7 +244,10 @@ class KestrelVectorEnv(VectorEnv):
 
     def scripted_actions(self) -> np.ndarray:
         a = self.task.scripted_actions()
-        return a if self._scale is None else np.ascontiguousarray(a / self._scale, dtype=np.float32)
+        if self._scale is None:
+            return a
+        off = 0.0 if self._offset is None else self._offset
+        return np.ascontiguousarray((a - off) / self._scale, dtype=np.float32)
 
     def __repr__(self) -> str:
         return f"KestrelVectorEnv({self.task.name if self.task else self._task_id}, num_envs={self.num_envs})"

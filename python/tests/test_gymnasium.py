@@ -114,3 +114,31 @@ def test_normalised_actions_and_vehicle_frame_obs():
                                                   dtype=np.float32),
                    "Kestrel-PositionSetpoint-v0", episodes=64, seed=11, threads=1, action_scale=[2, 2, 2, 1], vehicle_frame_obs=True)
     assert res.success_rate >= 0.95 and res.crash_rate == 0, res
+
+
+def test_action_offset_motor_commands():
+    # The trainer's interface for Kestrel-PositionSetpointMotors-v0 (issue 11): normalised motor
+    # commands around hover thrust, offset + scale * clip(a, -1, 1) N. The zero action is hover
+    # (the task's own zero action is motors off: the robot falls); the mapping is exact.
+    import pytest
+
+    import kestrel
+
+    hover = 0.25 * 9.81 / 4
+    plain = kestrel.make_vec("Kestrel-PositionSetpointMotors-v0", num_envs=8, seed=3, threads=1)
+    env = kestrel.make_vec("Kestrel-PositionSetpointMotors-v0", num_envs=8, seed=3, threads=1, action_scale=hover,
+                           action_offset=hover)
+    assert np.all(env.single_action_space.high == 1) and np.allclose(env.action_offset, hover)
+    plain.reset(), env.reset()
+    a = np.tile(np.float32([0.5, -0.25, 2.0, -3.0]), (8, 1))  # the last two clipped to +-1
+    plain.step(np.ascontiguousarray(np.float32(hover) + np.float32(hover) * np.clip(a, -1, 1)))
+    env.step(a)
+    assert plain.state_hash == env.state_hash
+    env.reset()
+    crashes = 0
+    for _ in range(200):
+        _, _, te, _, _ = env.step(np.zeros((8, 4), np.float32))
+        crashes += int(te.sum())
+    assert crashes == 0
+    with pytest.raises(ValueError, match="action_offset"):
+        kestrel.make_vec("Kestrel-PositionSetpointMotors-v0", num_envs=2, seed=0, threads=1, action_offset=hover)
