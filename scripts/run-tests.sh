@@ -11,22 +11,24 @@ cd "$(dirname "$0")/.."
 ./scripts/deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 
-echo "== host + Cortex-M4F (QEMU)"
+start=$(date +%s)
+stage() { echo "== $1 (at $(( $(date +%s) - start )) s)"; }
+stage "host + Cortex-M4F (QEMU)"
 cmake --preset host
 cmake --build --preset host -j "$jobs"
 ctest --preset host -j "$jobs"
 
-echo "== host with AddressSanitizer + UBSan"
+stage "host with AddressSanitizer + UBSan"
 cmake --preset host-asan
 cmake --build --preset host-asan -j "$jobs"
 ctest --preset host-asan -j "$jobs"
-echo "== fuzz regression (clang + libFuzzer)"
+stage "fuzz regression (clang + libFuzzer)"
 # The five fuzz targets over their committed corpora, a fixed number of runs from a fixed seed
 # (tests/fuzz/CMakeLists.txt); long campaigns: scripts/run-fuzz.sh.
 cmake --preset host-fuzz
 cmake --build --preset host-fuzz -j "$jobs"
 ctest --preset host-fuzz
-echo "== ThreadSanitizer (multi-threaded world/task/planar step)"
+stage "ThreadSanitizer (multi-threaded world/task/planar step)"
 # Builds only the task and backend test executables (the sim library under TSan dominates the
 # cost) and runs their tests that step with >= 2 threads (the test preset's name filter): rigid
 # World through SimulatorRigid and the tasks, planar, navigation/custom/goal-box tasks. The World
@@ -36,9 +38,9 @@ echo "== ThreadSanitizer (multi-threaded world/task/planar step)"
 cmake --preset host-tsan
 cmake --build --preset host-tsan -j "$jobs"
 ctest --preset host-tsan -j "$jobs"
-echo "== Python"
+stage "Python"
 # Non-editable install of the package (scikit-build-core: build/python/, incremental), then pytest.
 # The determinism test compares with the CLI built above (build/host/sim/kestrel).
 CMAKE_BUILD_PARALLEL_LEVEL="$jobs" .venv/bin/python -m pip install -q --disable-pip-version-check --no-build-isolation .
 .venv/bin/python -m pytest -q python/tests
-echo "== all tests passed"
+stage "all tests passed"
