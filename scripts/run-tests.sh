@@ -7,11 +7,11 @@
 # ThreadSanitizer (only those tests' executables are built). Installs missing
 # Debian packages and the pinned Python packages first.
 set -eu
+start=$(date +%s)  # stages print the seconds since here (deps included)
 cd "$(dirname "$0")/.."
 ./scripts/deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 
-start=$(date +%s)
 stage() { echo "== $1 (at $(( $(date +%s) - start )) s)"; }
 stage "host + Cortex-M4F (QEMU)"
 cmake --preset host
