@@ -6,7 +6,6 @@
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
-#include "kestrel/sim/episode.hpp"
 #include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/simulator.hpp"
 
@@ -61,13 +60,13 @@ class RigidSimulator final : public Simulator {
   World* world() { return world_.get(); }
 
   void post_physics_step() override {
+    const std::vector<std::uint8_t>& ended = world_->data().episode_ended;  // the World's own end rule, once
     for (int e = 0; e < num_envs_; ++e) {
-      // The World resets an ended episode inside its step (auto-reset), which leaves the
-      // environment at episode step 0.
-      const bool reset = auto_reset_ ? world_->episode_step(e) == 0 : ended(e);
+      const bool reset = ended[static_cast<std::size_t>(e)] != 0;
       reset_buf_[static_cast<std::size_t>(e)] = reset ? 1 : 0;
       if (!reset || !auto_reset_) continue;
-      // The new episode's actions (its target setpoint) become the current ones.
+      // The World reset the ended episode inside its step (auto-reset): the new episode's actions
+      // (its target setpoint) become the current ones.
       for (int r = 0; r < robots_per_env_; ++r) {
         const std::size_t i = static_cast<std::size_t>(e * robots_per_env_ + r);
         for (int j = 0; j < action_dim_; ++j)
@@ -186,19 +185,6 @@ class RigidSimulator final : public Simulator {
 
   WorldSummary summary() const override { return world_->summary(); }
 
-  /// With auto-reset off: World::env_step's end rules (timeout, exit with its 0.5 m margin, crash
-  /// with reset_on_collision), evaluated on the state the World left.
-  bool ended(int e) const {
-    if (world_->episode_step(e) >= cfg_.task.episode_len_env_steps) return true;
-    Vec3 lo, hi;
-    world_->lower_upper_bounds(e, lo, hi);
-    for (int r = 0; r < robots_per_env_; ++r) {
-      const Vec3& p = world_->robot_state(e, r).position_w;
-      if (out_of_bounds(p, lo, hi)) return true;
-      if (cfg_.env.reset_on_collision && world_->crashed(e, r)) return true;
-    }
-    return false;
-  }
   std::uint64_t state_hash() const override { return world_->state_hash(); }
 
  protected:

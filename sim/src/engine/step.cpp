@@ -205,6 +205,7 @@ void env_step(const WorldModel& m, WorldData& d, int env) {
 void env_step_begin(const WorldModel& m, WorldData& d, int env) {
   const int n = d.phys_steps[env];
   for (int r = 0; r < m.robots_per_env; ++r) d.crashed[m.index(env, r)] = 0;  // per env-step flag
+  d.episode_ended[static_cast<std::size_t>(env)] = 0;
   if (m.cfg.task.setpoint_speed_m_s > 0 && m.cfg.task.kind == TaskKind::position_setpoint &&
       m.cfg.controller.kind == ControllerKind::lee_position) {
     // Moving setpoint: advance it by at most speed * (env-step duration) towards the target.
@@ -247,6 +248,7 @@ void env_step_end(const WorldModel& m, WorldData& d, int env) {
   }
   if (out) ++es.out_of_bounds;
   if (timeout || out || (any_crash && m.cfg.env.reset_on_collision)) {
+    d.episode_ended[static_cast<std::size_t>(env)] = 1;  // what a Simulator's reset_buf reports
     ++es.episodes_done;
     real dist = 0;
     for (int r = 0; r < m.robots_per_env; ++r) dist += (d.target_w[m.index(env, r)] - d.state[m.index(env, r)].position_w).norm();
