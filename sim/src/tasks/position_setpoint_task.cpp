@@ -7,6 +7,7 @@
 
 #include "kestrel/policy/observations.hpp"
 #include "kestrel/sim/task.hpp"
+#include "kestrel/sim/episode.hpp"
 #include "task_support.hpp"
 
 namespace kestrel::sim {
@@ -115,6 +116,10 @@ class PositionSetpointTask final : public Task {
         ++infos_.crashes;
       } else {
         ++infos_.truncations;
+        // Success as Aerial Gym's evaluation and the scripted harness count it: the episode ran to
+        // its time limit and ended within task.success_radius_m of the target (episode.hpp).
+        const real d = std::sqrt(static_cast<real>(e_w[0] * e_w[0] + e_w[1] * e_w[1] + e_w[2] * e_w[2]));
+        if (within_success_radius(d, sim_->config().task.success_radius_m)) ++infos_.successes;
       }
       infos_.episode_reward_sum += episode_reward_[i];
     }

@@ -250,6 +250,23 @@ TEST(SimTask, RewardRisesUnderScriptedPolicyNotUnderZeroActions) {
   EXPECT_EQ(scripted->infos().terminations, 0u);
 }
 
+// Successes are counted as the scripted harness and the Python evaluation count them: an episode
+// that runs to its time limit within task.success_radius_m of the target. The scripted policy
+// reaches the targets of 300-step episodes; hovering where it starts (zero actions) reaches none.
+TEST(SimTask, SuccessesCountTruncationsWithinTheRadius) {
+  WorldConfig c = task_config(32, 11);
+  c.task.episode_len_env_steps = 300;
+  auto scripted = build(c);
+  auto zero = build(c);
+  ASSERT_TRUE(scripted && zero);
+  (void)reward_curve(*scripted, true, 300);
+  (void)reward_curve(*zero, false, 300);
+  EXPECT_EQ(scripted->infos().episodes, 32u);
+  EXPECT_GE(scripted->infos().successes, 24u) << "of 32";
+  EXPECT_LE(scripted->infos().successes, scripted->infos().truncations);
+  EXPECT_EQ(zero->infos().successes, 0u);
+}
+
 // The "reward falls under zero actions". Under lee_position_control a zero action is a
 // zero offset ("hold here"), so the reward above stays flat. What a zero action means depends on
 // the controller configuration, as in Aerial Gym:
