@@ -81,6 +81,7 @@ class PythonTaskVectorEnv(VectorEnv):
         self._seed = int(seed)
         self._steps = np.zeros(self.num_envs, dtype=np.int64)
         self._len = self.sim.episode_len_env_steps
+        self._fresh = True  # built from self._seed and not stepped since
 
     def _obs(self) -> np.ndarray:
         obs = np.asarray(self.task.observations(self.sim), dtype=np.float32)
@@ -90,10 +91,13 @@ class PythonTaskVectorEnv(VectorEnv):
         return obs
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        if seed is not None and int(seed) != self._seed:
-            self._build(seed)  # every stream is a function of (seed, env): a new seed is a new world
-        else:
+        if seed is not None and not (self._fresh and int(seed) == self._seed):
+            # Every stream is a function of (seed, env): reset(seed=s) rebuilds the world from s,
+            # so the same seed gives the same episodes again (gymnasium's reset contract).
+            self._build(seed)
+        elif not self._fresh:
             self.sim.reset_idx(list(range(self.num_envs)))
+        self._fresh = False
         self._steps[:] = 0
         return self._obs(), {}
 

@@ -78,9 +78,14 @@ def test_python_task_runs_truncates_and_rewards_a_good_policy():
     assert truncs == 2 * 16  # every episode hits the 150-step limit twice in 300 steps
     # Flying towards the target earns clearly more than hovering where it started.
     assert r_good.mean() > r_still.mean() + 0.5
-    # Same seed, same stream.
+    # Same seed, same stream: from a new env, and from the same env reset with that seed again.
     r_again, _ = _rollout(toward)
     np.testing.assert_array_equal(r_good, r_again)
+    env = kestrel.PythonTaskVectorEnv(Hover(), SCENE, num_envs=16, seed=0, threads=1, backend="rigid")
+    first, _ = env.reset(seed=0)
+    env.step(toward(first))
+    again, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(first, again)
 
 
 def test_python_task_checks_its_outputs():
