@@ -145,6 +145,16 @@ void parse_simulator(const YAML::Node& n, SimulatorConfig& s) {
   apply_schema(n, "simulator", simulator_schema(), s);
 }
 
+/// The task section's own keys and its nested `curriculum` map (task.curriculum).
+void apply_task(const YAML::Node& n, TaskConfig& t) {
+  apply_schema(n, "task", task_schema(), t);
+  if (!n.IsMap()) return;
+  if (const YAML::Node cur = n["curriculum"]) {
+    if (!cur.IsMap()) bad("task.curriculum", "expected a map of " + std::string(curriculum_schema().doc));
+    apply_schema(cur, "task.curriculum", curriculum_schema(), t.curriculum);
+  }
+}
+
 void parse_sim(const YAML::Node& n, SimParams& s) {
   s = lookup(registries().sims, section_name(n, "sim"), "sim");
   apply_schema(n, "sim", sim_schema(), s);
@@ -299,7 +309,7 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::str
   apply_schema(ctrl, "controller", controller_schema(), c.controller);
   const YAML::Node task = root["task"] ? root["task"] : YAML::Node("position_setpoint");
   c.task = lookup(registries().tasks, section_name(task, "task"), "task");
-  apply_schema(task, "task", task_schema(), c.task);
+  apply_task(task, c.task);
   // Sensors attach to the robot: `sensors: [base_depth_camera, {name: vl53l5cx, every: 2}]`.
   if (task_scene && !root["sensors"]) {
     for (const auto& ts : td.sensors) {
@@ -398,7 +408,7 @@ bool register_preset(const std::string& kind, const std::string& name, const std
     }
     if (kind == "task") {
       TaskConfig v = lookup(r.tasks, section_name(n, "task"), "task");
-      apply_schema(n, "task", task_schema(), v);
+      apply_task(n, v);
       v.name = name;
       return add(r.tasks, v);
     }

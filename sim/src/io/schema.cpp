@@ -339,7 +339,29 @@ const Schema<TaskConfig>& task_schema() {
                "candidate (start, target) pairs drawn per reset"),
       real_f<S>("setpoint_speed_m_s", &S::setpoint_speed_m_s, "m/s", 0, 1000, "moving setpoint speed towards the target (0: the target)"),
   };
-  static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f), nullptr, 0};
+  static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"}};
+  static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f),
+                           st, std::size(st)};
+  return s;
+}
+
+const Schema<CurriculumConfig>& curriculum_schema() {
+  using S = CurriculumConfig;
+  static const Field<S> f[] = {
+      int_f<S>("min_level", &S::min_level, 0, kNoMax, nullptr, "lowest level (env.curriculum_level 0)"),
+      int_f<S>("max_level", &S::max_level, 0, kNoMax, nullptr, "highest level (env.curriculum_level 1); >= min_level"),
+      int_f<S>("start_level", &S::start_level, 0, kNoMax, nullptr, "level of the first episodes (clamped into [min_level, max_level])"),
+      int_f<S>("check_after_episodes", &S::check_after_episodes, 1, kNoMax, nullptr, "ended episodes per success-rate check"),
+      int_f<S>("increase_step", &S::increase_step, 0, kNoMax, nullptr, "levels up when the rate exceeds success_rate_for_increase"),
+      int_f<S>("decrease_step", &S::decrease_step, 0, kNoMax, nullptr, "levels down when the rate is below success_rate_for_decrease"),
+      real_f<S>("success_rate_for_increase", &S::success_rate_for_increase, "", 0, 1, "success rate over a check that moves up"),
+      real_f<S>("success_rate_for_decrease", &S::success_rate_for_decrease, "", 0, 1, "success rate over a check that moves down"),
+  };
+  static const Schema<S> s{"task.curriculum",
+                           "min_level, max_level, start_level, check_after_episodes, increase_step, decrease_step, "
+                           "success_rate_for_increase, success_rate_for_decrease: Aerial Gym's navigation curriculum "
+                           "(increase_step = decrease_step = 0 holds the level at start_level)",
+                           f, std::size(f), nullptr, 0};
   return s;
 }
 
@@ -456,7 +478,7 @@ bool check_config_fields(const WorldConfig& c, std::string& error) {
   if (!check_fields(sim_schema(), c.sim, "sim", error) || !check_fields(simulator_schema(), c.simulator, "simulator", error) ||
       !check_fields(env_schema(), c.env, "env", error) || !check_fields(terrain_schema(), c.env.terrain, "env.terrain", error) ||
       !check_fields(robot_schema(), c.robot, "robot", error) || !check_fields(shape_schema(), c.robot.shape, "robot.collision_shape", error) ||
-      !check_fields(task_schema(), c.task, "task", error))
+      !check_fields(task_schema(), c.task, "task", error) || !check_fields(curriculum_schema(), c.task.curriculum, "task.curriculum", error))
     return false;
   for (const AssetClass& a : c.env.assets)
     if (!check_fields(asset_schema(), a, "env.assets." + a.name, error)) return false;
@@ -481,6 +503,7 @@ std::string scenario_reference_markdown() {
   document(out, shape_schema());
   document(out, controller_schema());
   document(out, task_schema());
+  document(out, curriculum_schema());
   return out.str();
 }
 

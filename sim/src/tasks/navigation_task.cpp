@@ -280,7 +280,10 @@ std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const Navi
   }
   const NavigationCurriculum& c = params.curriculum;
   if (c.min_level > c.max_level || c.check_after_episodes < 1 || c.increase_step < 0 || c.decrease_step < 0) {
-    error = pre + "curriculum: expected min_level <= max_level, check_after_episodes >= 1, steps >= 0";
+    error = pre + "task.curriculum: expected min_level <= max_level, check_after_episodes >= 1, increase_step and "
+                  "decrease_step >= 0, got min_level " + std::to_string(c.min_level) + ", max_level " +
+            std::to_string(c.max_level) + ", check_after_episodes " + std::to_string(c.check_after_episodes) +
+            ", increase_step " + std::to_string(c.increase_step) + ", decrease_step " + std::to_string(c.decrease_step);
     return nullptr;
   }
   if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || params.pool_rows < 1 || params.pool_cols < 1) {

@@ -233,7 +233,11 @@ bool task_defaults(const std::string& task_name, TaskDefaults& out) {
 std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error) {
   const std::string& id = config.task.name;
   if (id == "position_setpoint_task") return make_position_setpoint_task(config, backend, error);
-  if (id == "navigation_task") return make_navigation_task(config, NavigationParams(), backend, error);
+  if (id == "navigation_task") {
+    NavigationParams p;
+    p.curriculum = config.task.curriculum;
+    return make_navigation_task(config, p, backend, error);
+  }
   if (custom_tasks().has(id)) {
     CustomTaskSpec spec;
     custom_tasks().make(id, spec);

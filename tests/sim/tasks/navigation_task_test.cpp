@@ -323,3 +323,38 @@ TEST(NavigationTask, ErrorsAndScenario) {
   EXPECT_STREQ(t->name(), "navigation_task");
   EXPECT_EQ(t->num_envs(), 3);
 }
+
+// task.curriculum from a scenario file: a level held fixed at the top (an evaluation there), and a
+// curriculum that cannot hold refused with the section, the fields and the values.
+TEST(NavigationTask, CurriculumFromTheScenario) {
+  std::string err;
+  WorldConfig s;
+  ASSERT_TRUE(load_scenario_string("task: {name: navigation_task, episode_len_env_steps: 5,\n"
+                                   "       curriculum: {start_level: 10, increase_step: 0, decrease_step: 0,\n"
+                                   "                    check_after_episodes: 2}}\n"
+                                   "env: {name: env_with_obstacles, num_envs: 2}\n",
+                                   "nav.yaml", s, err))
+      << err;
+  EXPECT_EQ(s.task.curriculum.start_level, 10);
+  EXPECT_EQ(s.task.curriculum.max_level, 10);
+  EXPECT_EQ(s.task.curriculum.decrease_step, 0);
+  EXPECT_EQ(s.task.curriculum.check_after_episodes, 2);
+  auto t = make_task(s, err);
+  ASSERT_TRUE(t) << err;
+  EXPECT_EQ(t->infos().curriculum_level, 10);
+  EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).data().curriculum_level), 1.0f);  // every obstacle
+  const std::vector<float> zero(2 * 4, 0.0f);
+  for (int k = 0; k < 20; ++k) t->step(zero.data());  // timeouts only: would lower a free curriculum
+  EXPECT_GE(t->infos().episodes, 4u);
+  EXPECT_EQ(t->infos().curriculum_level, 10);
+  EXPECT_EQ(t->infos().curriculum_changes, 0u);
+
+  EXPECT_FALSE(load_scenario_string("task: {name: navigation_task, curriculum: {increase_stp: 1}}\n", "nav.yaml", s, err));
+  EXPECT_NE(err.find("task.curriculum.increase_stp"), std::string::npos) << err;
+  EXPECT_FALSE(load_scenario_string("task: {name: navigation_task, curriculum: {success_rate_for_increase: 2}}\n", "nav.yaml", s, err));
+  EXPECT_NE(err.find("task.curriculum.success_rate_for_increase"), std::string::npos) << err;
+  ASSERT_TRUE(load_scenario_string("task: {name: navigation_task, curriculum: {min_level: 5, max_level: 2}}\n", "nav.yaml", s, err)) << err;
+  EXPECT_FALSE(make_task(s, err));
+  EXPECT_NE(err.find("task.curriculum: expected min_level <= max_level"), std::string::npos) << err;
+  EXPECT_NE(err.find("min_level 5, max_level 2"), std::string::npos) << err;
+}

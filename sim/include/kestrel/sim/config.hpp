@@ -181,6 +181,20 @@ struct ControllerConfig {
 
 /// Task: what actions the robots get and how success is measured.
 enum class TaskKind : std::uint8_t { hover = 0, position_setpoint };
+/// A curriculum over the obstacle count (task.curriculum): Aerial Gym's
+/// navigation_task_config.curriculum. Every check_after_episodes ended episodes the level moves up
+/// by increase_step when the success rate over them exceeds success_rate_for_increase, down by
+/// decrease_step below success_rate_for_decrease, within [min_level, max_level]; the level maps
+/// linearly onto env.curriculum_level (min_level -> 0, max_level -> 1). increase_step =
+/// decrease_step = 0 holds it (an evaluation at the top level: start_level = max_level).
+struct CurriculumConfig {
+  int min_level = 0, max_level = 10;
+  int start_level = 0;            // the reference starts at min_level
+  int check_after_episodes = 64;  // check_after_log_instances (2048 for 1024 GPU envs)
+  int increase_step = 2, decrease_step = 1;
+  real success_rate_for_increase = 0.7_r, success_rate_for_decrease = 0.6_r;
+};
+
 struct TaskConfig {
   std::string name = "position_setpoint";
   TaskKind kind = TaskKind::position_setpoint;
@@ -203,6 +217,7 @@ struct TaskConfig {
   // the saturated, curved response to a step of several metres (up to ~2 m off the line for a
   // 10 m step with the default Lee gains).
   real setpoint_speed_m_s = 0;
+  CurriculumConfig curriculum;  // read by the tasks with a curriculum (navigation_task)
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env
 

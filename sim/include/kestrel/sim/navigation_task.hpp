@@ -59,14 +59,8 @@ struct NavigationRewardParams {
   float collision_penalty = -100.0f;
 };
 
-/// navigation_task_config.curriculum (levels rescaled, see above).
-struct NavigationCurriculum {
-  int min_level = 0, max_level = 10;
-  int start_level = 0;               // the reference starts at min_level
-  int check_after_episodes = 64;     // check_after_log_instances (2048 for 1024 GPU envs)
-  int increase_step = 2, decrease_step = 1;
-  float success_rate_for_increase = 0.7f, success_rate_for_decrease = 0.6f;
-};
+/// navigation_task_config.curriculum (levels rescaled, see above): the scenario's task.curriculum.
+using NavigationCurriculum = CurriculumConfig;
 
 struct NavigationParams {
   float max_speed_m_s = 2.0f;

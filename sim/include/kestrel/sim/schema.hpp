@@ -62,6 +62,7 @@ const Schema<RobotConfig>& robot_schema();
 const Schema<ShapeSpec>& shape_schema();
 const Schema<ControllerConfig>& controller_schema();
 const Schema<TaskConfig>& task_schema();
+const Schema<CurriculumConfig>& curriculum_schema();
 
 /// The same ranges for a config built in code (C++, tests) rather than read from a file: every
 /// field of every schema within its allowed values, vectors finite, ranges ordered; assets and
