@@ -64,6 +64,10 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
     crash = np.zeros(n, bool)
     dist = np.zeros(n)
     setpoint = env.task.name == "position_setpoint_task"
+    # navigation_task: its observation 3 is the distance to the goal, so the first episode of each
+    # environment is told apart exactly: terminated within the success radius = success, else crash.
+    navigation = env.task.name == "navigation_task"
+    radius = env.task.success_radius_m
     before = env.task.infos
     while not done.all():
         obs, r, te, tr, info = env.step(policy(obs))
@@ -77,8 +81,13 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
                 success[ended] = info["success"][ended]
             if setpoint:
                 dist[ended] = np.linalg.norm(info["final_obs"][ended, :3], axis=1)
+            if navigation:
+                d = info["final_obs"][ended, 3]
+                dist[ended] = d
+                success[ended] = te[ended] & (d < radius)
+                crash[ended] = te[ended] & ~(d < radius)
             done |= ended
-    if not setpoint:  # the task's own counters over exactly the first episodes is not available: use its rates
+    if not setpoint and not navigation:  # the task's own counters over exactly the first episodes is not available: use its rates
         inf = env.task.infos
         eps = max(1, inf["episodes"] - before["episodes"])
         success[:] = False
@@ -86,7 +95,7 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
         crash[: int(round(n * (inf["crashes"] - before["crashes"]) / eps))] = True
     env.close()
     return EvalResult(n, float(ret.mean()), float(success.mean()), float(crash.mean()), float(length.mean()),
-                      float(dist.mean()) if setpoint else float("nan"))
+                      float(dist.mean()) if setpoint or navigation else float("nan"))
 
 
 class _Timer:
@@ -404,6 +413,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--eval-every", type=int, default=None, help="env-steps between evaluations")
     p.add_argument("--eval-episodes", type=int, default=1024)
     p.add_argument("--eval-seed", type=int, default=1_000_003, help="seed of the evaluation env (unseen in training)")
+    p.add_argument("--eval-level", default="top",
+                   help="tasks with a curriculum (navigation_task): the level the evaluation holds ('top': "
+                        "task.curriculum.max_level; 'train': the curriculum runs as in training; or a number)")
     p.add_argument("--target-success", type=float, default=None, help="stop at the first evaluation reaching it")
     p.add_argument("--rollout", type=int, default=None, help="learner steps (decisions) per env per update")
     p.add_argument("--epochs", type=int, default=5)
@@ -454,6 +466,16 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         overrides["task"] = {"episode_len_env_steps": args.episode_len}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
     env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
+    eval_overrides = dict(overrides)
+    if env.task.name == "navigation_task" and args.eval_level != "train":
+        # Evaluated at one level, held (no curriculum steps): Aerial Gym reports its navigation
+        # success at the curriculum's top level.
+        task_over = dict(eval_overrides.get("task", {}))
+        top = task_over.get("curriculum", {}).get("max_level", 10)  # CurriculumConfig's default
+        level = top if args.eval_level == "top" else int(args.eval_level)
+        task_over["curriculum"] = {**task_over.get("curriculum", {}), "start_level": level, "increase_step": 0,
+                                   "decrease_step": 0}
+        eval_overrides["task"] = task_over
     timer = _Timer(env)
     learner = Learner(args, env)
     rows: list[dict] = []
@@ -499,9 +521,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     def eval_row() -> dict:
         nonlocal log_w
         t0 = time.perf_counter()
-        res = evaluate(learner.policy(), args.task, args.eval_episodes, args.eval_seed, args.threads, **overrides)
+        res = evaluate(learner.policy(), args.task, args.eval_episodes, args.eval_seed, args.threads, **eval_overrides)
         row = {"env_steps": done_steps, "train_s": round(t_train, 3), "sim_s": round(timer.sim_s, 3), **asdict(res),
-               "eval_s": round(time.perf_counter() - t0, 3)}
+               "eval_s": round(time.perf_counter() - t0, 3), "train_level": env.task.infos.get("curriculum_level", 0)}
         rows.append(row)
         if log_w is None:
             log_w = csv.DictWriter(log_f, fieldnames=list(row.keys()))

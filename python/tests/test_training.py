@@ -37,3 +37,33 @@ def test_sb3_adapter_trains(tmp_path):
     res = evaluate(lambda o: model.predict(np.array(o), deterministic=True)[0].astype(np.float32), "Kestrel-PositionSetpoint-v0",
                    episodes=32, seed=5, threads=1, task={"episode_len_env_steps": 50})
     assert np.isfinite(res.mean_return)
+
+
+def test_navigation_evaluation_at_the_top_level():
+    """evaluate() on navigation_task: the curriculum held at a level through task.curriculum, the
+    first episode of each environment told apart exactly (terminated within the success radius =
+    success, else crash). Flying straight at the goal crashes far more at level 10 (every obstacle)
+    than at level 0; a hover only times out."""
+    def held(level):
+        return {"curriculum": {"start_level": level, "increase_step": 0, "decrease_step": 0}, "episode_len_env_steps": 400}
+
+    env = kestrel.make_vec("Kestrel-Navigation-v0", num_envs=2, seed=5, threads=1, task=held(10))
+    assert env.task.infos["curriculum_level"] == 10
+    env.close()
+
+    def hover(obs):
+        return np.zeros((obs.shape[0], 4), np.float32)
+
+    def toward_goal(obs):  # full speed along the unit error (obs 0-2: vehicle frame), no yaw
+        a = np.zeros((obs.shape[0], 4), np.float32)
+        a[:, :3] = obs[:, :3]
+        return a
+
+    still = evaluate(hover, "Kestrel-Navigation-v0", episodes=48, seed=77, threads=1, task=held(10))
+    top = evaluate(toward_goal, "Kestrel-Navigation-v0", episodes=48, seed=77, threads=1, task=held(10))
+    bottom = evaluate(toward_goal, "Kestrel-Navigation-v0", episodes=48, seed=77, threads=1, task=held(0))
+    assert still.episodes == top.episodes == bottom.episodes == 48
+    assert still.success_rate == 0.0 and still.crash_rate == 0.0 and still.mean_length == 400
+    assert top.success_rate + top.crash_rate <= 1.0 and bottom.success_rate + bottom.crash_rate <= 1.0
+    assert top.crash_rate > bottom.crash_rate + 0.3, (top, bottom)
+    assert bottom.final_distance_m < still.final_distance_m
