@@ -112,12 +112,19 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
   return 0;
 }
 
-int run(int argc, char** argv) {
+// `kestrel run`'s options.
+struct RunArgs {
   std::string scenario, out_dir = "kestrel_out", task_id;
   long long envs = -1, steps = 1000, threads = -1, seed = -1, image_env = 0;
   double max_memory_gib = -1;
   bool quiet = false, scripted = true;
-  constexpr long long kNoMax = 0x7fffffffffffffffLL;
+};
+
+constexpr long long kNoMax = 0x7fffffffffffffffLL;
+
+/// argv[2..] into `r`; false with the exit code in `code` (2: a bad option, after its message).
+bool parse_run_args(int argc, char** argv, RunArgs& r, int& code) {
+  code = 2;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](long long lo, long long hi, long long& v) {
@@ -128,92 +135,86 @@ int run(int argc, char** argv) {
       }
       ++i;
     };
-    if (a == "--envs") value(1, kMaxNumEnvs, envs);
-    else if (a == "--steps") value(1, kNoMax, steps);
-    else if (a == "--threads") value(1, kMaxThreads, threads);
-    else if (a == "--seed") value(0, kNoMax, seed);
-    else if (a == "--image-env") value(0, kMaxNumEnvs - 1, image_env);
+    if (a == "--envs") value(1, kMaxNumEnvs, r.envs);
+    else if (a == "--steps") value(1, kNoMax, r.steps);
+    else if (a == "--threads") value(1, kMaxThreads, r.threads);
+    else if (a == "--seed") value(0, kNoMax, r.seed);
+    else if (a == "--image-env") value(0, kMaxNumEnvs - 1, r.image_env);
     else if (a == "--max-memory-gib") {
       char* end = nullptr;
-      max_memory_gib = i + 1 < argc ? std::strtod(argv[i + 1], &end) : -1;
-      if (i + 1 >= argc || end == argv[i + 1] || *end != '\0' || !(max_memory_gib > 0) || !(max_memory_gib <= kMaxMemoryGiBSetting)) {
+      r.max_memory_gib = i + 1 < argc ? std::strtod(argv[i + 1], &end) : -1;
+      if (i + 1 >= argc || end == argv[i + 1] || *end != '\0' || !(r.max_memory_gib > 0) || !(r.max_memory_gib <= kMaxMemoryGiBSetting)) {
         std::fprintf(stderr, "kestrel run: --max-memory-gib expects a number in (0, %.0f] (GiB)\n", kMaxMemoryGiBSetting);
-        return 2;
+        return false;
       }
       ++i;
     }
-    else if (a == "--out" && i + 1 < argc) out_dir = argv[++i];
-    else if (a == "--quiet") quiet = true;
-    else if (a == "--task" && i + 1 < argc) task_id = argv[++i];
+    else if (a == "--out" && i + 1 < argc) r.out_dir = argv[++i];
+    else if (a == "--quiet") r.quiet = true;
+    else if (a == "--task" && i + 1 < argc) r.task_id = argv[++i];
     else if (a == "--policy" && i + 1 < argc) {
       const std::string p = argv[++i];
       if (p != "scripted" && p != "zero") {
         std::fprintf(stderr, "kestrel run: --policy expects scripted or zero, got \"%s\"\n", p.c_str());
-        return 2;
+        return false;
       }
-      scripted = p == "scripted";
+      r.scripted = p == "scripted";
     }
-    else if (!a.empty() && a[0] != '-' && scenario.empty()) scenario = a;
-    else return usage();
+    else if (!a.empty() && a[0] != '-' && r.scenario.empty()) r.scenario = a;
+    else {
+      code = usage();
+      return false;
+    }
   }
-  WorldConfig cfg;
+  return true;
+}
+
+/// The scenario (file, --task's own scene or the embedded default) with the options applied;
+/// false after printing the error. `label` names what runs, for messages.
+bool load_run_config(const RunArgs& r, WorldConfig& cfg, std::string& label) {
   std::string err;
-  if (!task_id.empty() && !is_rl_task(task_id) && !registries().tasks.has(task_id)) {
-    std::fprintf(stderr, "kestrel: --task: unknown task \"%s\"; registered task ids: %s\n", task_id.c_str(),
+  if (!r.task_id.empty() && !is_rl_task(r.task_id) && !registries().tasks.has(r.task_id)) {
+    std::fprintf(stderr, "kestrel: --task: unknown task \"%s\"; registered task ids: %s\n", r.task_id.c_str(),
                  rl_task_ids_joined().c_str());
-    return 1;
+    return false;
   }
   // --task alone: the task's own scene (as a scenario `task: ID` with no other section); with a
   // scenario: the scenario's scene with its task replaced.
-  const std::string label = !scenario.empty() ? scenario : !task_id.empty() ? "--task " + task_id : "<embedded default>";
-  g_label = label;
-  const bool ok = !scenario.empty()    ? load_scenario_file(scenario, cfg, err)
-                  : !task_id.empty() ? load_scenario_string("task: " + task_id + "\n", label, cfg, err)
+  label = !r.scenario.empty() ? r.scenario : !r.task_id.empty() ? "--task " + r.task_id : "<embedded default>";
+  g_label = label;  // main()'s last-resort messages, from here on
+  const bool ok = !r.scenario.empty()    ? load_scenario_file(r.scenario, cfg, err)
+                  : !r.task_id.empty() ? load_scenario_string("task: " + r.task_id + "\n", label, cfg, err)
                                        : load_scenario_string(default_scenario_yaml(), label, cfg, err);
   if (!ok) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
-    return 1;
+    return false;
   }
-  if (!task_id.empty() && !scenario.empty() && !registries().tasks.make(task_id, cfg.task)) return 1;
-  if (envs > 0) cfg.env.num_envs = static_cast<int>(envs);
-  if (seed >= 0) cfg.seed = static_cast<std::uint64_t>(seed);
+  if (!r.task_id.empty() && !r.scenario.empty() && !registries().tasks.make(r.task_id, cfg.task)) return false;
+  if (r.envs > 0) cfg.env.num_envs = static_cast<int>(r.envs);
+  if (r.seed >= 0) cfg.seed = static_cast<std::uint64_t>(r.seed);
   // Default: every hardware thread, within kMaxThreads.
-  cfg.num_threads = threads > 0 ? static_cast<int>(threads)
+  cfg.num_threads = r.threads > 0 ? static_cast<int>(r.threads)
                                 : static_cast<int>(std::min<unsigned>(kMaxThreads, std::max(1u, std::thread::hardware_concurrency())));
-  if (max_memory_gib > 0) cfg.max_memory_gib = max_memory_gib;
-  // Physics backend (sim/simulator.hpp): KESTREL_SIMULATOR, else the scenario's `simulator:`, else rigid.
-  Backend backend = Backend::rigid;
-  if (!resolve_backend(cfg, backend, err)) {
+  if (r.max_memory_gib > 0) cfg.max_memory_gib = r.max_memory_gib;
+  return true;
+}
+
+/// A scripted run of the rigid World: the header, the steps (a progress bar on long runs), the
+/// summary, the trajectory files and sensor images, the state hash.
+int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label) {
+  std::string err;
+  std::unique_ptr<World> world = World::create(cfg, err);
+  if (!world) {
     std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
     return 1;
   }
-  if (backend == Backend::planar) {
-    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, steps, scripted);
-    std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
-    if (!sim) {
-      std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
-      return 1;
-    }
-    return run_scripted(*sim, label, steps, out_dir, quiet);
-  }
-  if (cfg.robot.kind == robots::RobotKind::ground_vehicle) {
-    std::fprintf(stderr, "kestrel: %s: simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar\n",
-                 label.c_str());
-    return 1;
-  }
-  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, steps, scripted);
-  std::unique_ptr<World> world = World::create(cfg, err);
-  if (!world) {
-    std::fprintf(stderr, "kestrel: %s: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str(), err.c_str());
-    return 1;
-  }
-  world->enable_trace(6, static_cast<int>(steps));
-  std::printf("kestrel run: %s\n", scenario.empty() ? "<embedded default>" : scenario.c_str());
+  world->enable_trace(6, static_cast<int>(r.steps));
+  std::printf("kestrel run: %s\n", label.c_str());
   std::printf("  sim %s (dt %.4g s), env %s, robot %s x%d, controller %s, task %s\n", cfg.sim.name.c_str(),
               static_cast<double>(cfg.sim.dt_s), cfg.env.name.c_str(), cfg.robot.name.c_str(), cfg.robot.robots_per_env,
               cfg.controller.name.c_str(), cfg.task.name.c_str());
   std::printf("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
-              world->obstacle_capacity(), world->num_threads(), cfg.seed, steps);
+              world->obstacle_capacity(), world->num_threads(), cfg.seed, r.steps);
   for (int k = 0; k < world->num_sensors(); ++k) {
     const SensorConfig& sc = world->sensor_config(k);
     if (sc.kind == SensorKind::imu) std::printf("  sensor %s: IMU, every physics step\n", sc.name.c_str());
@@ -223,17 +224,17 @@ int run(int argc, char** argv) {
   std::printf("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
   // Progress bar on long runs (stderr, so the summary on stdout stays clean to compare).
-  const bool bar = !quiet && static_cast<double>(steps) * world->num_envs() >= 2e6;
-  const long long chunk = std::max(1LL, steps / 50);
+  const bool bar = !r.quiet && static_cast<double>(r.steps) * world->num_envs() >= 2e6;
+  const long long chunk = std::max(1LL, r.steps / 50);
   const auto t0 = std::chrono::steady_clock::now();
-  for (long long done = 0; done < steps;) {
-    const long long n = std::min(chunk, steps - done);
+  for (long long done = 0; done < r.steps;) {
+    const long long n = std::min(chunk, r.steps - done);
     world->step(static_cast<int>(n));
     done += n;
     if (bar) {
-      const int filled = static_cast<int>(40 * done / steps);
+      const int filled = static_cast<int>(40 * done / r.steps);
       std::fprintf(stderr, "\r  [%.*s%*s] %3lld%%", filled, "########################################", 40 - filled, "",
-                   100 * done / steps);
+                   100 * done / r.steps);
       std::fflush(stderr);
     }
   }
@@ -255,6 +256,7 @@ int run(int argc, char** argv) {
               s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
   if (s.placement_fallbacks > 0)
     std::printf("  placements without a clear start/target/path: %" PRIu64 "\n", s.placement_fallbacks);
+  const std::string& out_dir = r.out_dir;
   ::mkdir(out_dir.c_str(), 0755);
   if (!write_trajectory_csv(*world, out_dir + "/trajectory.csv", err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
       !write_trajectory_png(*world, out_dir + "/trajectory.png", err)) {
@@ -264,14 +266,46 @@ int run(int argc, char** argv) {
   std::printf("  wrote %s/trajectory.csv, %s/envs.csv, %s/trajectory.png\n", out_dir.c_str(), out_dir.c_str(), out_dir.c_str());
   if (world->num_sensors() > 0) {
     std::vector<std::string> images;
-    if (!write_sensor_pngs(*world, static_cast<int>(image_env), out_dir, images, err)) {
+    if (!write_sensor_pngs(*world, static_cast<int>(r.image_env), out_dir, images, err)) {
       std::fprintf(stderr, "kestrel: %s\n", err.c_str());
       return 1;
     }
-    for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), image_env);
+    for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), r.image_env);
   }
   std::printf("state hash: %016" PRIx64 "\n", world->state_hash());
   return 0;
+}
+
+int run(int argc, char** argv) {
+  RunArgs r;
+  int code = 0;
+  if (!parse_run_args(argc, argv, r, code)) return code;
+  WorldConfig cfg;
+  std::string label;
+  if (!load_run_config(r, cfg, label)) return 1;
+  std::string err;
+  // Physics backend (sim/simulator.hpp): KESTREL_SIMULATOR, else the scenario's `simulator:`, else rigid.
+  Backend backend = Backend::rigid;
+  if (!resolve_backend(cfg, backend, err)) {
+    std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+    return 1;
+  }
+  if (backend == Backend::planar) {
+    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted);
+    std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
+    if (!sim) {
+      std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+      return 1;
+    }
+    return run_scripted(*sim, label, r.steps, r.out_dir, r.quiet);
+  }
+  if (cfg.robot.kind == robots::RobotKind::ground_vehicle) {
+    std::fprintf(stderr, "kestrel: %s: simulator rigid: robot ground_vehicle drives on the planar backend only; use simulator: planar\n",
+                 label.c_str());
+    return 1;
+  }
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted);
+  return run_world(cfg, r, label);
 }
 
 int run_main(int argc, char** argv);

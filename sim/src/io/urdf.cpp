@@ -86,13 +86,19 @@ int rotor_index(const std::string& name) {
   return -1;
 }
 
-UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
-  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
-  if (robot == nullptr) bad("robot", "missing the <robot> root element");
-  UrdfRobot out;
-  out.name = robot->Attribute("name") ? robot->Attribute("name") : "";
+/// The kinematic tree as the file gives it: links and joints by name, the one root link.
+struct Tree {
   std::map<std::string, Link> links;
   std::map<std::string, Joint> joints;
+  std::string base;
+};
+
+/// Links, joints and the root of <robot>: names unique, every joint between known links, each link
+/// the child of at most one joint, exactly one root.
+Tree read_tree(const tinyxml2::XMLElement* robot) {
+  Tree t;
+  std::map<std::string, Link>& links = t.links;
+  std::map<std::string, Joint>& joints = t.joints;
   for (const tinyxml2::XMLElement* l = robot->FirstChildElement("link"); l; l = l->NextSiblingElement("link")) {
     const char* n = l->Attribute("name");
     if (n == nullptr || *n == 0) bad("link", "a <link> without a name");
@@ -121,16 +127,21 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
     jt.origin = parse_origin(j, w);
     joints[n] = jt;
   }
-  std::string base;
+  std::string& base = t.base;
   for (const auto& kv : links) {
     if (!kv.second.parent_joint.empty()) continue;
     if (!base.empty()) bad("robot", "two root links (\"" + base + "\" and \"" + kv.first + "\"); expected one base link");
     base = kv.first;
   }
   if (base.empty()) bad("robot", "no root link (the joints form a loop)");
-  out.base_link = base;
-  // Place every link: walk up to a placed ancestor (links count bounds the walk).
-  links[base].placed = true;
+  return t;
+}
+
+/// Every link's pose in the base frame: walk up to a placed ancestor (the link count bounds the walk).
+void place_links(Tree& t) {
+  std::map<std::string, Link>& links = t.links;
+  std::map<std::string, Joint>& joints = t.joints;
+  links[t.base].placed = true;
   for (auto& kv : links) {
     std::vector<std::string> chain;
     std::string cur = kv.first;
@@ -148,7 +159,12 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
       l.placed = true;
     }
   }
-  // Composite mass, centre of mass and inertia in the base frame.
+}
+
+/// Composite mass, centre of mass and inertia in the base frame; the body frame must be the centre
+/// of mass and the principal axes (Kestrel's rigid body takes a diagonal inertia).
+void composite_inertia(const Tree& t, UrdfRobot& out) {
+  const std::string& base = t.base;
   double mass = 0;
   V3 moment = V3::Zero();
   struct Part {
@@ -157,7 +173,7 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
     M3 i;
   };
   std::vector<Part> parts;
-  for (const auto& kv : links) {
+  for (const auto& kv : t.links) {
     const std::string w = "link[" + kv.first + "]/inertial";
     const tinyxml2::XMLElement* in = kv.second.xml->FirstChildElement("inertial");
     if (in == nullptr) continue;
@@ -202,8 +218,12 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
         "principal axes; align the base frame with them");
   out.mass_kg = static_cast<real>(mass);
   out.inertia_diag_kg_m2 = Vec3(static_cast<real>(inertia(0, 0)), static_cast<real>(inertia(1, 1)), static_cast<real>(inertia(2, 2)));
-  // Collision shape of the base link.
-  if (const tinyxml2::XMLElement* col = links[base].xml->FirstChildElement("collision")) {
+}
+
+/// The base link's collision shape (box, sphere or cylinder centred on the body frame), if any.
+void base_shape(const Tree& tree, UrdfRobot& out) {
+  const std::string& base = tree.base;
+  if (const tinyxml2::XMLElement* col = tree.links.at(base).xml->FirstChildElement("collision")) {
     const std::string w = "link[" + base + "]/collision";
     const Pose o = parse_origin(col, w);
     if (o.p.norm() > 1e-9 || !o.r.isIdentity(1e-9)) bad(w + "/origin", "expected a zero origin (the shape is centred on the body frame)");
@@ -232,9 +252,13 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
     out.has_shape = true;
     out.shape = s;
   }
-  // Rotors.
+}
+
+/// Rotor links rotor_<N> / prop_<N>, numbered 0, 1, ... : position and thrust axis in the base
+/// frame, spin direction from their joint's axis.
+void read_rotors(const Tree& t, UrdfRobot& out) {
   std::map<int, std::string> rotor_links;
-  for (const auto& kv : links) {
+  for (const auto& kv : t.links) {
     const int n = rotor_index(kv.first);
     if (n < 0) continue;
     if (rotor_links.count(n) != 0) bad("link[" + kv.first + "]", "rotor " + std::to_string(n) + " is also link \"" + rotor_links[n] + "\"");
@@ -247,9 +271,9 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
     const std::string w = "link[" + kv.second + "]";
     if (kv.first != expect) bad(w, "rotor links must be numbered 0, 1, ... without gaps (missing rotor_" + std::to_string(expect) + ")");
     ++expect;
-    if (kv.second == base) bad(w, "the base link cannot be a rotor");
-    const Link& l = links[kv.second];
-    const Joint& j = joints[l.parent_joint];
+    if (kv.second == t.base) bad(w, "the base link cannot be a rotor");
+    const Link& l = t.links.at(kv.second);
+    const Joint& j = t.joints.at(l.parent_joint);
     const std::string jw = "joint[" + l.parent_joint + "]";
     if (j.type != "continuous" && j.type != "revolute")
       bad(jw + "@type", "a rotor's joint must be continuous or revolute (its axis gives the spin direction), got \"" + j.type + "\"");
@@ -268,6 +292,19 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
     out.rotors.push_back(r);
     out.rotor_directions.push_back(static_cast<std::int8_t>(a[2] > 0 ? 1 : -1));
   }
+}
+
+UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
+  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  if (robot == nullptr) bad("robot", "missing the <robot> root element");
+  UrdfRobot out;
+  out.name = robot->Attribute("name") ? robot->Attribute("name") : "";
+  Tree t = read_tree(robot);
+  out.base_link = t.base;
+  place_links(t);
+  composite_inertia(t, out);
+  base_shape(t, out);
+  read_rotors(t, out);
   return out;
 }
 
