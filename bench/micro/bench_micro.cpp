@@ -241,6 +241,9 @@ struct ControllerBench : Batched<ControllerBench> {
         case ControllerKind::direct_motor:  // a policy's thrusts, sometimes just outside [0, 2] N
           for (int m = 0; m < 4; ++m) in.action[m] = a.uniform(-0.1_r, 2.1_r);
           break;
+        case ControllerKind::velocity_steering:  // not a multirotor kind: register_all skips them
+        case ControllerKind::joint_pd:
+          break;
       }
     }
   }
@@ -835,7 +838,7 @@ void add(const std::string& function, const std::string& airframe, int check_swe
 }
 
 void register_all() {
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) {
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) {  // update_controller's kinds
     const auto kind = static_cast<ControllerKind>(k);
     add<ControllerBench>(controller_name(kind),
                          kind == ControllerKind::rov_fully_actuated ? "base_rov" : "base_quadrotor", 20, kind);

@@ -12,7 +12,8 @@ KTEST(ControllerDispatch, NamesMatchAerialGymRegistry) {
   const char* names[kNumControllerKinds] = {
       "lee_position_control",       "lee_velocity_control", "lee_acceleration_control",
       "lee_attitude_control",       "lee_rates_control",    "lee_velocity_steering_angle_control",
-      "rov_fully_actuated_control", "direct_motor_control",
+      "rov_fully_actuated_control", "direct_motor_control", "velocity_steering_control",
+      "joint_pd_control",
   };
   for (std::size_t i = 0; i < kNumControllerKinds; ++i) {
     const ControllerKind kind = static_cast<ControllerKind>(i);
@@ -118,4 +119,116 @@ KTEST(ControllerDispatch, BadArgumentsAndRejectedInputs) {
   const real big[4] = {20, 0, 0, 0};
   KEXPECT_TRUE(update_controller(ControllerKind::lee_position, p, s, RigidBodyState(), big, 4, out) == Status::ok);
   KEXPECT_TRUE(s.lee.step_faults & kFaultCommandOutOfRange);
+}
+
+// The one table: every kind through control_update gives exactly its own update's result (the
+// multirotor kinds update_controller's, velocity steering update_velocity_steering's, joint PD
+// update_joint_pd's), each family reads only its own storage, and a missing pointer, input or a
+// too-short action is refused with nothing written.
+KTEST(ControllerDispatch, EveryKindThroughOneTable) {
+  KEXPECT_TRUE(controller_family(ControllerKind::lee_rates) == ControlFamily::multirotor);
+  KEXPECT_TRUE(controller_family(ControllerKind::direct_motor) == ControlFamily::multirotor);
+  KEXPECT_TRUE(controller_family(ControllerKind::velocity_steering) == ControlFamily::ground_vehicle);
+  KEXPECT_TRUE(controller_family(ControllerKind::joint_pd) == ControlFamily::articulated);
+  KEXPECT_FALSE(controller_outputs_wrench(ControllerKind::velocity_steering));
+
+  // Multirotor: the same wrench as update_controller.
+  ControllerParams mp;
+  mp.lee = lee_params_base_quadrotor();
+  ControllerState ms, ms_direct;
+  ControllerParamsRef mpr;
+  mpr.multirotor = &mp;
+  ControllerStateRef msr;
+  msr.multirotor = &ms;
+  KEXPECT_TRUE(control_reset(ControllerKind::lee_velocity, mpr, msr, nullptr) == Status::ok);
+  controller_reset(ControllerKind::lee_velocity, mp, ms_direct);
+  RigidBodyState body;
+  body.linvel_w = Vec3(0.3_r, -0.2_r, 0.1_r);
+  ControllerInput in;
+  in.body = &body;
+  const real a4[4] = {1, -0.5_r, 0.2_r, 0.3_r};
+  ControlOutput out;
+  ControllerOutput direct;
+  KEXPECT_TRUE(control_update(ControllerKind::lee_velocity, mpr, msr, in, a4, 4, out) == Status::ok);
+  KEXPECT_TRUE(update_controller(ControllerKind::lee_velocity, mp, ms_direct, body, a4, 4, direct) == Status::ok);
+  KEXPECT_TRUE(out.family == ControlFamily::multirotor);
+  KEXPECT_TRUE(out.multirotor.wrench_b.force_b == direct.wrench_b.force_b);
+  KEXPECT_TRUE(out.multirotor.wrench_b.torque_b == direct.wrench_b.torque_b);
+  KEXPECT_EQ(controller_action_dim(ControllerKind::lee_velocity, mpr), 4u);
+  // update_controller is the multirotor slice: the other families' kinds are not its.
+  KEXPECT_TRUE(update_controller(ControllerKind::velocity_steering, mp, ms, body, a4, 4, direct) == Status::invalid_argument);
+  KEXPECT_EQ(controller_action_dim(ControllerKind::joint_pd, mp), 0u);
+
+  // Ground vehicle: the same drive command as update_velocity_steering, over two steps.
+  VelocitySteeringParams vp;
+  VelocitySteeringState vs, vs_direct;
+  vs.gain_scale = 1.25_r;
+  ControllerParamsRef vpr;
+  vpr.steering = &vp;
+  ControllerStateRef vsr;
+  vsr.steering = &vs;
+  KEXPECT_TRUE(control_reset(ControllerKind::velocity_steering, vpr, vsr, nullptr) == Status::ok);
+  KEXPECT_EQ(vs.gain_scale, 1.25_r);  // the caller's gain draw is kept
+  velocity_steering_reset(vs_direct, 1.25_r);
+  ControllerInput vin;
+  vin.speed_m_s = 0.4_r;
+  vin.dt_s = 0.02_r;
+  const real drive[2] = {1.5_r, 0.3_r};
+  for (int k = 0; k < 2; ++k) {
+    VelocitySteeringOutput d;
+    KEXPECT_TRUE(control_update(ControllerKind::velocity_steering, vpr, vsr, vin, drive, 2, out) == Status::ok);
+    KEXPECT_TRUE(update_velocity_steering(vp, vs_direct, vin.speed_m_s, drive, vin.dt_s, d) == Status::ok);
+    KEXPECT_TRUE(out.family == ControlFamily::ground_vehicle);
+    KEXPECT_EQ(out.drive.accel_m_s2, d.accel_m_s2);
+    KEXPECT_EQ(out.drive.steering_rad, d.steering_rad);
+    KEXPECT_EQ(out.drive.yaw_rate_radps, d.yaw_rate_radps);
+  }
+  KEXPECT_EQ(controller_action_dim(ControllerKind::velocity_steering, vpr), 2u);
+  const real nan_drive[2] = {std::numeric_limits<real>::quiet_NaN(), 0};
+  KEXPECT_TRUE(control_update(ControllerKind::velocity_steering, vpr, vsr, vin, nan_drive, 2, out) == Status::non_finite_input);
+  KEXPECT_TRUE((control_faults(ControllerKind::velocity_steering, vsr) & kFaultNonFiniteCommand) != 0);
+
+  // Articulated: the same torques as update_joint_pd, with its delay line.
+  JointPdControlParams jp;
+  jp.num_joints = 3;
+  for (std::size_t j = 0; j < 3; ++j) {
+    jp.kp[j] = 20;
+    jp.kd[j] = 0.5_r;
+    jp.torque_limit_Nm[j] = 5;
+  }
+  jp.delay_steps = 1;
+  KEXPECT_TRUE(validate_joint_pd_params(jp) == Status::ok);
+  JointPdControlState js, js_direct;
+  ControllerParamsRef jpr;
+  jpr.joints = &jp;
+  ControllerStateRef jsr;
+  jsr.joints = &js;
+  KEXPECT_TRUE(control_reset(ControllerKind::joint_pd, jpr, jsr, nullptr) == Status::ok);
+  joint_pd_reset(jp, js_direct);
+  const real q[3] = {0.1_r, -0.2_r, 0.05_r}, qd[3] = {0.5_r, 0, -1};
+  ControllerInput jin;
+  jin.joint_pos_rad = q;
+  jin.joint_vel_radps = qd;
+  const real ja[2][3] = {{0.3_r, 0.1_r, -0.4_r}, {0.2_r, 0.2_r, 0.2_r}};
+  for (int k = 0; k < 2; ++k) {
+    real tau[kMaxControlJoints] = {};
+    KEXPECT_TRUE(control_update(ControllerKind::joint_pd, jpr, jsr, jin, ja[k], 3, out) == Status::ok);
+    KEXPECT_TRUE(update_joint_pd(jp, js_direct, q, qd, ja[k], tau) == Status::ok);
+    KEXPECT_TRUE(out.family == ControlFamily::articulated);
+    KEXPECT_EQ(out.num_joints, 3u);
+    for (std::size_t j = 0; j < 3; ++j) KEXPECT_EQ(out.joint_torque_Nm[j], tau[j]);
+  }
+  KEXPECT_EQ(controller_action_dim(ControllerKind::joint_pd, jpr), 3u);
+
+  // Refusals: nothing written.
+  out.drive.accel_m_s2 = 42;
+  KEXPECT_TRUE(control_update(ControllerKind::velocity_steering, mpr, msr, vin, drive, 2, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_update(ControllerKind::velocity_steering, vpr, vsr, vin, drive, 1, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_update(ControllerKind::lee_velocity, mpr, msr, ControllerInput(), a4, 4, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_update(ControllerKind::joint_pd, jpr, jsr, ControllerInput(), ja[0], 3, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_update(ControllerKind::joint_pd, jpr, jsr, jin, ja[0], 2, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_update(static_cast<ControllerKind>(77), vpr, vsr, vin, drive, 2, out) == Status::invalid_argument);
+  KEXPECT_TRUE(control_reset(ControllerKind::joint_pd, vpr, vsr, nullptr) == Status::invalid_argument);
+  KEXPECT_EQ(out.drive.accel_m_s2, 42);
+  KEXPECT_EQ(controller_action_dim(ControllerKind::joint_pd, vpr), 0u);
 }

@@ -525,7 +525,7 @@ KTEST(GoldenControllers, EveryCaseOfEveryControllerMatchesAerialGym) {
   }
   KEXPECT_TRUE(r.ok());
   // A parity test that silently checks nothing must fail: every Lee-family kind, all 40 cases.
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) {
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) {
     if (static_cast<ControllerKind>(k) == ControllerKind::direct_motor) continue;
     KEXPECT_EQ(seen[k], 1);
     KEXPECT_EQ(cases_checked[k], kExpectedCases);

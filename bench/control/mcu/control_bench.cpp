@@ -57,8 +57,8 @@ struct Quad {
   LeeState lee_state;
 };
 Quad g_quad, g_hexa;
-ControllerParams g_ctrl_params[kNumControllerKinds];
-ControllerState g_ctrl_state[kNumControllerKinds];
+ControllerParams g_ctrl_params[kNumMultirotorControllerKinds];
+ControllerState g_ctrl_state[kNumMultirotorControllerKinds];
 ControllerOutput g_ctrl_out;
 RigidBodyModel g_body_model;
 RigidBodyState g_body, g_body_saved;
@@ -103,12 +103,12 @@ void init_mlp(kestrel::policy::Activation a) {
 }
 
 Quad g_saved_quad, g_saved_hexa;  // state restored before every timed pass
-ControllerState g_saved_ctrl[kNumControllerKinds];
+ControllerState g_saved_ctrl[kNumMultirotorControllerKinds];
 
 void restore() {
   g_quad = g_saved_quad;
   g_hexa = g_saved_hexa;
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) g_ctrl_state[k] = g_saved_ctrl[k];
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) g_ctrl_state[k] = g_saved_ctrl[k];
   g_body = g_body_saved;
   g_capi = g_capi_saved;
 }
@@ -218,7 +218,7 @@ int main() {
   bool ok = setup_frame(al::kBaseQuadrotor, al::kBaseQuadrotorMotors, g_quad);
   ok = setup_frame(al::kHexarotor, al::kHexarotorMotors, g_hexa) && ok;
   // Every controller kind with the quad's Lee parameters; direct motor with the quad's limits.
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) {
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) {
     const auto kind = static_cast<ControllerKind>(k);
     g_ctrl_params[k].lee = kind == ControllerKind::rov_fully_actuated ? lee_params_rov() : lee_params_base_quadrotor();
     g_ctrl_params[k].motors.num_motors = 4;
@@ -242,7 +242,7 @@ int main() {
   g_capi_saved = g_capi;
   g_saved_quad = g_quad;
   g_saved_hexa = g_hexa;
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) g_saved_ctrl[k] = g_ctrl_state[k];
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) g_saved_ctrl[k] = g_ctrl_state[k];
   restore();
   if (!ok) {
     println("control bench: setup failed");
@@ -258,7 +258,7 @@ int main() {
   println("function,airframe,instructions_per_call,calls,stack_bytes");
 
   constexpr int kCalls = 100;
-  const real actions[kNumControllerKinds][7] = {
+  const real actions[kNumMultirotorControllerKinds][7] = {
       {0.0_r, 0.0_r, 1.0_r, 0.3_r},            // position [x y z yaw]
       {0.5_r, 0.2_r, -0.1_r, 0.1_r},           // velocity [vx vy vz yaw_rate]
       {0.5_r, 0.2_r, 0.3_r, 0.1_r},            // acceleration [ax ay az yaw_rate]
@@ -268,7 +268,7 @@ int main() {
       {0.2_r, -0.1_r, 1.0_r, 0, 0, 0.0998334_r, 0.995004_r},  // ROV pose [x y z qx qy qz qw]
       {0.5_r, 0.6_r, 0.4_r, 0.5_r},            // direct motor thrusts
   };
-  for (std::size_t k = 0; k < kNumControllerKinds; ++k) {
+  for (std::size_t k = 0; k < kNumMultirotorControllerKinds; ++k) {
     const auto kind = static_cast<ControllerKind>(k);
     bench(controller_name(kind), k == 6 ? "base_rov" : "base_quadrotor", kCalls, [k, kind, &actions] {
       g_sink = static_cast<std::uint32_t>(

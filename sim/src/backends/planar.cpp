@@ -308,7 +308,12 @@ class PlanarSimulator final : public Simulator {
       if (validate_velocity_steering_params(vs_) != Status::ok)
         return bad("simulator.wheelbase_m / max_speed_m_s / max_steering_rad: expected positive values, steering < 1.5 rad");
       adim = static_cast<int>(kVelocitySteeringActionDim);
-      controller_ = "velocity_steering_angle";
+      // The ground vehicle's own controller (the table's velocity_steering kind). A multirotor
+      // controller named in the scenario (a task's default) stands for it, as before the table
+      // had the kind; another family's is refused.
+      if (controller_family(c.controller.kind) == ControlFamily::articulated)
+        return bad("controller " + c.controller.name + " drives joints; a ground vehicle takes velocity_steering_control");
+      controller_ = kestrel::controller_name(ControllerKind::velocity_steering);
     } else {
       const ControllerKind k = c.controller.kind;
       if (k != ControllerKind::lee_position && k != ControllerKind::lee_velocity && k != ControllerKind::lee_acceleration &&
@@ -511,6 +516,11 @@ class PlanarSimulator final : public Simulator {
     s.mean_tracking_error_m = s.env_steps > 0 ? err / (static_cast<double>(s.env_steps) * robots_per_env_) : 0;
     s.final_mean_distance_m = final_dist / static_cast<double>(num_robots());
     s.episode_end_distance_m = s.episodes_done > 0 ? end_dist / static_cast<double>(s.episodes_done) : 0;
+    // As the rigid World: the union of every robot's latched controller / chain faults, and the
+    // non-ok statuses met while resetting.
+    for (std::size_t i = 0; i < static_cast<std::size_t>(num_robots()); ++i)
+      s.fault_bits |= ground_ ? steer_[i].faults.bits : robots::multirotor_faults(mr_state_[i]);
+    s.reset_errors = reset_errors_;
     return s;
   }
 
@@ -737,14 +747,16 @@ class PlanarSimulator final : public Simulator {
     }
     prev_omega_[i] = 0;
     if (ground_) {
-      velocity_steering_reset(steer_[i], gain_scale_[i]);
+      steer_[i].gain_scale = gain_scale_[i];  // the table's reset keeps the caller's gain draw
+      if (control_reset(ControllerKind::velocity_steering, steering_params(vs_), steering_state(i), nullptr) != Status::ok)
+        ++reset_errors_;
       return;
     }
     real hover[al::kMaxRotors] = {};
     const real per_motor = mass(i) * kStandardGravity / static_cast<real>(mr_.airframe.num_rotors);
     for (int m = 0; m < mr_.airframe.num_rotors; ++m) hover[m] = per_motor;
     robots::MultirotorState& mr = mr_state_[i];
-    (void)robots::multirotor_reset(mr_, mr, &rng, rng, hover);  // valid model and hover: cannot fail
+    if (robots::multirotor_reset(mr_, mr, &rng, rng, hover) != Status::ok) ++reset_errors_;  // valid model and hover: none expected
     // Domain randomisation over the drawn state: controller gains and motor time constants.
     LeeGains& g = mr.ctrl.lee.gains;
     g.k_pos *= gain_scale_[i];
@@ -859,8 +871,15 @@ class PlanarSimulator final : public Simulator {
     p.max_accel_m_s2 *= motor_scale_[i];  // drive constant randomisation scales the available force
     p.max_decel_m_s2 *= motor_scale_[i];
     p.mass_kg = mass(i);
-    VelocitySteeringOutput out;
-    (void)update_velocity_steering(p, steer_[i], speed, &actions_[i * static_cast<std::size_t>(action_dim_)], dt, out);
+    // Through the controller table; a rejected update holds the last safe output and latches its
+    // fault bits in steer_[i] (summary().fault_bits reports them).
+    ControllerInput in;
+    in.speed_m_s = speed;
+    in.dt_s = dt;
+    ControlOutput co;
+    (void)control_update(ControllerKind::velocity_steering, steering_params(p), steering_state(i), in,
+                         &actions_[i * static_cast<std::size_t>(action_dim_)], kVelocitySteeringActionDim, co);
+    const VelocitySteeringOutput& out = co.drive;
     const real w = out.yaw_rate_radps;
     // Kinematic bicycle: the rear axle moves at v along the heading, the body turns at w; Box2D
     // takes the centre of mass's velocity, v_o + w x (c - o).
@@ -1031,6 +1050,17 @@ class PlanarSimulator final : public Simulator {
   real half_x_ = 0, half_y_ = 0, radius_ = 0, bound_r_ = 0, plane_z_ = 0;
   std::vector<int> class_first_slot_;  // per asset class: its first slot in Env::slots
   std::vector<VelocitySteeringState> steer_;
+  std::uint64_t reset_errors_ = 0;  // non-ok statuses of the core's resets (summary().reset_errors)
+  static ControllerParamsRef steering_params(const VelocitySteeringParams& p) {
+    ControllerParamsRef r;
+    r.steering = &p;
+    return r;
+  }
+  ControllerStateRef steering_state(std::size_t i) {
+    ControllerStateRef r;
+    r.steering = &steer_[i];
+    return r;
+  }
   std::vector<robots::MultirotorState> mr_state_;
   std::vector<real> force_xy_, normal_sum_, prev_omega_;
   std::vector<real> kin_;  // (robots x 5) ground vehicle: speed set, COM velocity set (x, y), heading (cos, sin)

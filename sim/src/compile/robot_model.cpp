@@ -39,6 +39,13 @@ bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, s
   m.desat = al::SequentialDesaturationParams();
   m.allocator =
       rc.use_desaturation ? robots::AllocatorKind::sequential_desaturation : robots::AllocatorKind::pseudo_inverse;
+  if (controller_family(config.controller.kind) != ControlFamily::multirotor)
+    return fail("controller " + config.controller.name + " drives a " +
+                (controller_family(config.controller.kind) == ControlFamily::ground_vehicle ? "ground vehicle (robot ground_vehicle, simulator: planar)"
+                                                                                            : "robot with joints") +
+                "; a multirotor takes lee_position_control, lee_velocity_control, lee_acceleration_control, "
+                "lee_attitude_control, lee_rates_control, lee_velocity_steering_angle_control, rov_fully_actuated_control or "
+                "direct_motor_control");
   m.controller = config.controller.kind;
   m.ctrl.lee = rc.airframe == al::AirframePreset::base_rov ? lee_params_rov() : lee_params_base_quadrotor();
   m.ctrl.lee.mass_kg = rc.mass_kg;

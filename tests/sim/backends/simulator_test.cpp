@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <vector>
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/rigid_backend.hpp"
@@ -310,4 +312,50 @@ TEST(SimulatorSelect, UnsupportedOperationsNameBackendAndAlternative) {
   const real flat_q[4] = {0, 0, 0, 1}, off_plane[3] = {0, 0, 3};
   EXPECT_FALSE(sim->reset_root_states(id, 1, off_plane, flat_q, zero, zero));
   EXPECT_NE(sim->last_error().find("plane height"), std::string::npos) << sim->last_error();
+}
+
+// The controller table on the backends: velocity_steering_control is the ground vehicle's kind
+// (named by the Simulator, accepted from a scenario), refused by name on a multirotor; both
+// backends report latched faults in summary().fault_bits (a NaN command is held, not dropped).
+TEST(Simulator, ControllerFamiliesAndFaultBits) {
+  std::string err;
+  WorldConfig car;
+  ASSERT_TRUE(load_scenario_string("simulator: {name: planar, vehicle: ground_vehicle}\nrobot: ground_vehicle\n"
+                                   "controller: velocity_steering_control\nenv: {name: planar_obstacles, num_envs: 2}\n",
+                                   "car.yaml", car, err))
+      << err;
+  EXPECT_EQ(car.controller.kind, ControllerKind::velocity_steering);
+  std::unique_ptr<Simulator> sim = make_simulator(car, Backend::planar, err);
+  ASSERT_TRUE(sim) << err;
+  EXPECT_STREQ(sim->controller_name(), "velocity_steering_control");
+  EXPECT_EQ(sim->summary().fault_bits, 0u);
+  std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()), 0.5_r);
+  sim->step(a.data());
+  EXPECT_EQ(sim->summary().fault_bits & kFaultNonFiniteCommand, 0u);
+  a[0] = std::numeric_limits<real>::quiet_NaN();
+  sim->step(a.data());
+  EXPECT_NE(sim->summary().fault_bits & kFaultNonFiniteCommand, 0u);
+  EXPECT_EQ(sim->summary().reset_errors, 0u);
+
+  // A multirotor (rigid or planar) refuses the ground vehicle's controller, naming what it takes.
+  WorldConfig quad;
+  quad.env.num_envs = 1;
+  ASSERT_TRUE(registries().controllers.make("velocity_steering_control", quad.controller));
+  EXPECT_FALSE(make_simulator(quad, Backend::rigid, err));
+  EXPECT_NE(err.find("controller velocity_steering_control drives a ground vehicle"), std::string::npos) << err;
+  EXPECT_NE(err.find("lee_position_control"), std::string::npos) << err;
+  EXPECT_FALSE(make_simulator(quad, Backend::planar, err));
+  EXPECT_NE(err.find("velocity_steering_control"), std::string::npos) << err;
+  // joint_pd_control has no robot yet: not a scenario's controller.
+  EXPECT_FALSE(registries().controllers.has("joint_pd_control"));
+
+  // Rigid: a NaN action is held and latched too.
+  WorldConfig r;
+  r.env.num_envs = 1;
+  std::unique_ptr<Simulator> rigid = make_simulator(r, Backend::rigid, err);
+  ASSERT_TRUE(rigid) << err;
+  std::vector<real> ra(static_cast<std::size_t>(rigid->action_dim()), 0);
+  ra[1] = std::numeric_limits<real>::quiet_NaN();
+  rigid->step(ra.data());
+  EXPECT_NE(rigid->summary().fault_bits & kFaultNonFiniteCommand, 0u);
 }

@@ -99,7 +99,7 @@ class Simulator {
   int decimation() const { return decimation_; }
   real dt_s() const { return cfg_.sim.dt_s; }
   virtual int num_threads() const = 0;
-  /// Name of what drives the robots ("lee_position_control", "velocity_steering_angle", ...).
+  /// Name of what drives the robots: the controller kind ("lee_position_control", "velocity_steering_control", ...).
   virtual const char* controller_name() const = 0;
   /// True for the planar car (action [speed_m_s, steering_rad]); false for multirotors.
   bool ground_vehicle() const { return ground_vehicle_; }
