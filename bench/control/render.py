@@ -122,7 +122,7 @@ def render_policy_memory(results, target, mrows):
         if weights else ""
     verdict = "met" if fl <= POLICY_FLASH_TARGET else "NOT met"
     return ["", f"Policy controller alone (policy image minus the empty image: observation builder -> 13-64-64-4 ELU MLP "
-                f"of platform/firmware/position_policy.hpp -> action clip, validate_mlp at start-up): flash {fl} B{split} "
+                f"of platform/firmware/position_policy.hpp -> action clip, the network checked at compile time): flash {fl} B{split} "
                 f"(goal <= {POLICY_FLASH_TARGET} B: {verdict}), static RAM {ram} B (the held action; activations on the stack)."]
 
 

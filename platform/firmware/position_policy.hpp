@@ -21,5 +21,8 @@ inline constexpr kPositionPolicyType kPositionPolicy = {
     {0x0.0p+0, 0x0.0p+0, 0x0.0p+0, 0x0.0p+0},
     kestrel::policy::Squash::tanh,
 };
+// Checked when it is compiled (validate_mlp is constexpr): a firmware flying it needs no check
+// at start-up, nor its code in flash.
+static_assert(kestrel::policy::validate_mlp(kPositionPolicy) == kestrel::Status::ok, "kPositionPolicy: invalid network");
 
 }  // namespace kestrel::policy::generated

@@ -214,6 +214,9 @@ inline constexpr {name}Type {name} = {{
     {arr(spec.action_offset)},
     kestrel::policy::Squash::{spec.squash},
 }};
+// Checked when it is compiled (validate_mlp is constexpr): a firmware flying it needs no check
+// at start-up, nor its code in flash.
+static_assert(kestrel::policy::validate_mlp({name}) == kestrel::Status::ok, "{name}: invalid network");
 
 }}  // namespace {namespace}
 """

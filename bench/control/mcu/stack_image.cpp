@@ -24,7 +24,7 @@
 //                          in the vehicle frame -> policy::mlp_forward over the exported
 //                          13-64-64-4 ELU network of platform/firmware/position_policy.hpp, weights
 //                          constexpr in flash -> the task's action clip, the last action held on a
-//                          rejected inference) plus validate_mlp at start-up, stepped from
+//                          rejected inference; the network checked at compile time), stepped from
 //                          volatile inputs. No Lee controller, allocation or plant: those are the
 //                          cascade image's. Static RAM: the held action only (the activations
 //                          are on the stack, control.csv's mlp_forward stack_bytes).
@@ -194,12 +194,11 @@ __attribute__((noinline)) void policy_step(const real (&in)[13], const real (&ta
   for (int i = 0; i < 4; ++i) g_out[i] = g_action[i];
 }
 
-// The firmware checks the network once before flying it (policy_loop.cpp); counted as set-up code.
-__attribute__((noinline)) bool setup() { return kestrel::policy::validate_mlp(kPositionPolicy) == kestrel::Status::ok; }
+// No set-up code: the network is checked when it is compiled (position_policy.hpp's static_assert
+// on the constexpr validate_mlp), as policy_loop.cpp relies on.
 }  // namespace
 
 int main() {
-  if (!setup()) return 1;
   for (std::uint32_t k = 0; k < g_steps; ++k) {
     real in[13];
     for (int i = 0; i < 13; ++i) in[i] = g_in[i];

@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/status.hpp"
@@ -89,29 +90,39 @@ inline real activate(Activation a, real x) {
 // function of each element. Float builds call the pieces of tanh_det / exp_det that the element
 // can reach (kernel/math.hpp: ELU's exp of x <= 0 skips the overflow test, which no such x passes),
 // with the same bits.
+//
+// One out-of-line function per kind (noinline): a network's two hidden layers share one copy of
+// its activation's code, and a network whose kind is a constant (a constexpr MlpParams in flash,
+// mlp_forward inlined into its caller) links only that kind's. On the M4F this is what keeps the
+// policy's code small beside its weights (the 22 KB flash goal of a 64-64 network).
+#if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
+__attribute__((noinline)) inline void tanh_all(real* v, int n) {
+  kestrel::detail::TanhSmall c = kestrel::detail::kTanhSmall;
+#if defined(KESTREL_MLP_ARM_VFP)
+  // Empty asm: the values are unchanged, but GCC can no longer reload them from the literal
+  // pool on every iteration, so they stay in registers for the whole loop.
+  __asm__("" : "+t"(c.max_abs), "+t"(c.c5), "+t"(c.c4), "+t"(c.c3), "+t"(c.c2), "+t"(c.c1));
+#endif
+  for (int i = 0; i < n; ++i) v[i] = kestrel::detail::tanh_f32(v[i], c);
+}
+__attribute__((noinline)) inline void elu_all(real* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!(v[i] > 0)) v[i] = kestrel::detail::exp_f32_nonpositive(v[i]) - 1;
+}
+__attribute__((noinline)) inline void relu_all(real* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!(v[i] > 0)) v[i] = 0;
+}
+#endif
+
 __attribute__((always_inline)) inline void activate_all(Activation a, real* v, int n) {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
   for (int i = 0; i < n; ++i) v[i] = activate(a, v[i]);
 #else
   switch (a) {
-    case Activation::tanh: {
-      kestrel::detail::TanhSmall c = kestrel::detail::kTanhSmall;
-#if defined(KESTREL_MLP_ARM_VFP)
-      // Empty asm: the values are unchanged, but GCC can no longer reload them from the literal
-      // pool on every iteration, so they stay in registers for the whole loop.
-      __asm__("" : "+t"(c.max_abs), "+t"(c.c5), "+t"(c.c4), "+t"(c.c3), "+t"(c.c2), "+t"(c.c1));
-#endif
-      for (int i = 0; i < n; ++i) v[i] = kestrel::detail::tanh_f32(v[i], c);
-      return;
-    }
-    case Activation::elu:
-      for (int i = 0; i < n; ++i)
-        if (!(v[i] > 0)) v[i] = kestrel::detail::exp_f32_nonpositive(v[i]) - 1;
-      return;
-    case Activation::relu:
-      for (int i = 0; i < n; ++i)
-        if (!(v[i] > 0)) v[i] = 0;
-      return;
+    case Activation::tanh: tanh_all(v, n); return;
+    case Activation::elu: elu_all(v, n); return;
+    case Activation::relu: relu_all(v, n); return;
   }
 #endif
 }
@@ -165,8 +176,10 @@ __attribute__((always_inline)) inline void dense_portable(const real* w, const r
 // the rest of `in`. 55 instructions per 48 multiply-adds, against 16 per 4 in the compiled loop.
 // Rows are contiguous (weight[out][in]), so a group's last row pointer ends on the next group's
 // first row.
-__attribute__((always_inline)) inline void dense_vfp(const real* w, const real* b, int in, int groups, const real* x,
-                                                     real* y) {
+// Out of line (noinline): the three layers share one copy of it (~0.4 KB of code, against three
+// inlined copies), for two extra instructions per layer.
+__attribute__((noinline)) inline void dense_vfp(const real* w, const real* b, int in, int groups, const real* x,
+                                                real* y) {
   const real* r1;
   const real* r2;
   const real* r3;
@@ -308,23 +321,43 @@ __attribute__((always_inline)) inline void dense(const real* w, const real* b, i
 }
 }  // namespace detail
 
+namespace detail {
+// Finite, in a constant expression too (std::isfinite is not constexpr in C++17).
+constexpr bool finite_c(real x) {
+  return x == x && x <= std::numeric_limits<real>::max() && x >= -std::numeric_limits<real>::max();
+}
+constexpr bool all_finite_c(const real* v, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!finite_c(v[i])) return false;
+  return true;
+}
+}  // namespace detail
+
 /// Every number finite, inv_std >= 0, obs_clip > 0, low <= high. invalid_argument otherwise.
+/// constexpr: a network generated into flash (python/kestrel/export.py) is checked by a
+/// static_assert when it is compiled; weights filled at run time are checked by calling it.
 template <int kObs, int kH1, int kH2, int kAct>
-[[nodiscard]] Status validate_mlp(const MlpParams<kObs, kH1, kH2, kAct>& p) {
+[[nodiscard]] constexpr Status validate_mlp(const MlpParams<kObs, kH1, kH2, kAct>& p) {
+  using detail::all_finite_c;
+  using detail::finite_c;
   if (p.activation != Activation::tanh && p.activation != Activation::elu && p.activation != Activation::relu)
     return Status::invalid_argument;
   if (p.output_squash != Squash::none && p.output_squash != Squash::tanh) return Status::invalid_argument;
-  if (!all_finite(p.obs_mean, kObs) || !all_finite(p.obs_inv_std, kObs) || !(p.obs_clip > 0) || !is_finite(p.obs_clip))
+  if (!all_finite_c(p.obs_mean, kObs) || !all_finite_c(p.obs_inv_std, kObs) || !(p.obs_clip > 0) || !finite_c(p.obs_clip))
     return Status::invalid_argument;
   for (int i = 0; i < kObs; ++i)
     if (p.obs_inv_std[i] < 0) return Status::invalid_argument;
-  if (!all_finite(&p.hidden1.weight[0][0], kObs * kH1) || !all_finite(p.hidden1.bias, kH1) ||
-      !all_finite(&p.hidden2.weight[0][0], kH1 * kH2) || !all_finite(p.hidden2.bias, kH2) ||
-      !all_finite(&p.output.weight[0][0], kH2 * kAct) || !all_finite(p.output.bias, kAct))
+  for (int o = 0; o < kH1; ++o)
+    if (!all_finite_c(p.hidden1.weight[o], kObs)) return Status::invalid_argument;
+  for (int o = 0; o < kH2; ++o)
+    if (!all_finite_c(p.hidden2.weight[o], kH1)) return Status::invalid_argument;
+  for (int o = 0; o < kAct; ++o)
+    if (!all_finite_c(p.output.weight[o], kH2)) return Status::invalid_argument;
+  if (!all_finite_c(p.hidden1.bias, kH1) || !all_finite_c(p.hidden2.bias, kH2) || !all_finite_c(p.output.bias, kAct))
     return Status::invalid_argument;
   for (int i = 0; i < kAct; ++i)
-    if (!is_finite(p.action_low[i]) || !is_finite(p.action_high[i]) || !(p.action_low[i] <= p.action_high[i]) ||
-        !is_finite(p.action_scale[i]) || !is_finite(p.action_offset[i]))
+    if (!finite_c(p.action_low[i]) || !finite_c(p.action_high[i]) || !(p.action_low[i] <= p.action_high[i]) ||
+        !finite_c(p.action_scale[i]) || !finite_c(p.action_offset[i]))
       return Status::invalid_argument;
   return Status::ok;
 }
@@ -380,8 +413,11 @@ __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, 
 /// One inference with compile-time sizes (the loops' bounds are constants after inlining):
 /// obs (kObs values) -> action (kAct values); statuses as mlp_forward_view. The activations live
 /// on the stack (kObs + kH1 + kH2 + kAct reals).
+// Inlined into its caller: with a constexpr network (the exported header) the activation and
+// squash kinds are constants there, so only their code is linked.
 template <int kObs, int kH1, int kH2, int kAct>
-[[nodiscard]] Status mlp_forward(const MlpParams<kObs, kH1, kH2, kAct>& p, const real* obs, real* action) {
+[[nodiscard]] __attribute__((always_inline)) inline Status mlp_forward(const MlpParams<kObs, kH1, kH2, kAct>& p,
+                                                                       const real* obs, real* action) {
   real scratch[kObs + kH1 + kH2 + kAct];
   return mlp_forward_view(view_of(p), obs, action, scratch);
 }
