@@ -391,19 +391,13 @@ class PlanarSimulator final : public Simulator {
     refresh_all();
   }
 
-  bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
-                         const real* ang_vel_w) override {
+  // After the common checks (Simulator::reset_root_states): only states the plane can hold.
+  bool set_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
+                       const real* ang_vel_w) override {
     const int rows = count * robots_per_env_;
-    for (int k = 0; k < count; ++k)
-      if (env_ids[k] < 0 || env_ids[k] >= num_envs_) return fail("simulator planar: reset_root_states: env id " + std::to_string(env_ids[k]) + " out of range");
     for (int j = 0; j < rows; ++j) {
       const std::string row = " (row " + std::to_string(j) + ")";
-      if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
-          !all_finite(ang_vel_w + 3 * j, 3))
-        return fail("simulator planar: reset_root_states: non-finite value" + row);
       const real* q = quat_xyzw + 4 * j;
-      const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-      if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail("simulator planar: reset_root_states: quaternion is not unit length" + row);
       if (std::fabs(q[0]) > 1e-4_r || std::fabs(q[1]) > 1e-4_r || std::fabs(ang_vel_w[3 * j]) > 1e-6_r ||
           std::fabs(ang_vel_w[3 * j + 1]) > 1e-6_r)
         return fail("simulator planar: reset_root_states: roll/pitch (a non-yaw orientation or x/y angular velocity) cannot "

@@ -89,20 +89,9 @@ class RigidSimulator final : public Simulator {
     mark_derived_stale();
   }
 
-  bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
-                         const real* ang_vel_w) override {
-    // Validate everything first: nothing is written unless every row is good.
-    const int rows = count * robots_per_env_;
-    for (int k = 0; k < count; ++k)
-      if (env_ids[k] < 0 || env_ids[k] >= num_envs_) return fail("simulator rigid: reset_root_states: env id " + std::to_string(env_ids[k]) + " out of range");
-    for (int j = 0; j < rows; ++j) {
-      if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
-          !all_finite(ang_vel_w + 3 * j, 3))
-        return fail("simulator rigid: reset_root_states: non-finite value in row " + std::to_string(j));
-      const real* q = quat_xyzw + 4 * j;
-      const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-      if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail("simulator rigid: reset_root_states: quaternion of row " + std::to_string(j) + " is not unit length");
-    }
+  // After the common checks (Simulator::reset_root_states): every 3-D state is representable.
+  bool set_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
+                       const real* ang_vel_w) override {
     for (int k = 0; k < count; ++k) {
       for (int r = 0; r < robots_per_env_; ++r) {
         const int j = k * robots_per_env_ + r;

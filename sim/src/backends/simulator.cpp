@@ -106,6 +106,24 @@ void Simulator::step(const real* actions) {
   post_physics_step();
 }
 
+bool Simulator::reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
+                                  const real* lin_vel_w, const real* ang_vel_w) {
+  const std::string pre = std::string("simulator ") + backend_name() + ": reset_root_states: ";
+  for (int k = 0; k < count; ++k)
+    if (env_ids[k] < 0 || env_ids[k] >= num_envs_)
+      return fail(pre + "env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")");
+  const int rows = count * robots_per_env_;
+  for (int j = 0; j < rows; ++j) {
+    if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
+        !all_finite(ang_vel_w + 3 * j, 3))
+      return fail(pre + "non-finite value in row " + std::to_string(j));
+    const real* q = quat_xyzw + 4 * j;
+    const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail(pre + "quaternion of row " + std::to_string(j) + " is not unit length");
+  }
+  return set_root_states(env_ids, count, pos_w, quat_xyzw, lin_vel_w, ang_vel_w);
+}
+
 void Simulator::push_robots() {
   const real m = cfg_.simulator.max_push_vel_xy_m_s;
   for (int e = 0; e < num_envs_; ++e) {
@@ -168,69 +186,6 @@ void scripted_setpoint_actions(const Simulator& sim, real* actions) {
       for (int k = 0; k < 3 && k < ad; ++k) a[k] = t[3 * i + k];
     }
   }
-}
-
-namespace {
-AssetClass planar_asset(const char* name, AssetKind kind, int n, int semantic, real min_size, real max_size) {
-  AssetClass c;
-  c.name = name;
-  c.kind = kind;
-  c.num_assets = n;
-  c.min_num_assets = n / 2;
-  c.semantic_id = semantic;
-  c.min_size_m = Vec3::Constant(min_size);
-  c.max_size_m = Vec3::Constant(max_size);
-  c.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.5_r);
-  c.max_position_ratio = Vec3(0.7_r, 0.95_r, 0.5_r);
-  c.max_euler_rad = Vec3(0, 0, kPi);  // yaw only: planar boxes
-  return c;
-}
-}  // namespace
-
-void register_simulators(Registries& r) {
-  r.simulators.add("rigid", "3-D World: Newton-Euler bodies, libccd/analytic collision, penalty contact (default)", [] {
-    SimulatorConfig c;
-    c.backend = "rigid";
-    return c;
-  });
-  r.simulators.add("planar", "Box2D 2.4 plane: ground vehicle (velocity + steering, bicycle model) or fixed-altitude multirotor",
-                   [] {
-                     SimulatorConfig c;
-                     c.backend = "planar";
-                     return c;
-                   });
-  r.envs.add("planar_obstacles", "12 x 12 m yard: bounding walls, 8 round pillars, 6 yaw-rotated boxes (planar or rigid)", [] {
-    EnvConfig e;
-    e.name = "planar_obstacles";
-    e.lower_bound_min_m = Vec3(-6, -6, 0);
-    e.lower_bound_max_m = Vec3(-6, -6, 0);
-    e.upper_bound_min_m = Vec3(6, 6, 2);
-    e.upper_bound_max_m = Vec3(6, 6, 2);
-    AssetClass walls = planar_asset("walls", AssetKind::wall, 5, 8, 0, 0);
-    walls.keep_in_env = true;
-    walls.min_num_assets = 5;
-    e.assets.push_back(walls);
-    AssetClass pillars = planar_asset("pillars", AssetKind::thin, 8, 6, 0.15_r, 0.35_r);
-    pillars.min_size_m[2] = pillars.max_size_m[2] = 2;  // full height (a cylinder of 2 m on rigid)
-    e.assets.push_back(pillars);
-    e.assets.push_back(planar_asset("boxes", AssetKind::cube, 6, 2, 0.4_r, 0.9_r));
-    return e;
-  });
-  r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
-    RobotConfig c;
-    c.name = "ground_vehicle";
-    c.kind = robots::RobotKind::ground_vehicle;
-    c.mass_kg = 3.5_r;
-    c.inertia_diag_kg_m2 = Vec3(0.03_r, 0.08_r, 0.1_r);
-    c.shape.type = ShapeType::box;
-    c.shape.half_extents_m = Vec3(0.25_r, 0.15_r, 0.1_r);
-    c.min_init_position_ratio = Vec3(0.05_r, 0.1_r, 0);
-    c.max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0);
-    // Starts facing into the yard (+-90 deg of +x): a car cannot turn on the spot, and a U-turn
-    // (radius L / tan(0.4) = 0.78 m plus the body) next to the start wall often hits it.
-    c.max_init_yaw_rad = kPi / 2;
-    return c;
-  });
 }
 
 }  // namespace kestrel::sim

@@ -24,6 +24,16 @@ AssetClass asset(const char* name, AssetKind kind, int n, int semantic, Vec3 min
   return c;
 }
 
+// An obstacle class of the planar yard: upright, yaw only, in the middle band of the yard.
+AssetClass yard_asset(const char* name, AssetKind kind, int n, int semantic, real min_size, real max_size) {
+  AssetClass c = asset(name, kind, n, semantic, Vec3::Constant(min_size), Vec3::Constant(max_size));
+  c.min_num_assets = n / 2;
+  c.min_position_ratio = Vec3(0.3_r, 0.05_r, 0.5_r);
+  c.max_position_ratio = Vec3(0.7_r, 0.95_r, 0.5_r);
+  c.max_euler_rad = Vec3(0, 0, kPi);  // yaw only: planar boxes
+  return c;
+}
+
 EnvConfig obstacle_env(const char* name) {
   EnvConfig e;
   e.name = name;
@@ -101,13 +111,60 @@ void register_sensors(Registry<SensorConfig>& s) {
   s.add("bmi088", "Bosch BMI088 IMU", [] { return imu_sensor("bmi088", ks::imu_preset_bmi088()); });
 }
 
+// The backends and the planar presets (a yard for both backends, the car for planar).
+void register_simulators(Registries& r) {
+  r.simulators.add("rigid", "3-D World: Newton-Euler bodies, libccd/analytic collision, penalty contact (default)", [] {
+    SimulatorConfig c;
+    c.backend = "rigid";
+    return c;
+  });
+  r.simulators.add("planar", "Box2D 2.4 plane: ground vehicle (velocity + steering, bicycle model) or fixed-altitude multirotor",
+                   [] {
+                     SimulatorConfig c;
+                     c.backend = "planar";
+                     return c;
+                   });
+  r.envs.add("planar_obstacles", "12 x 12 m yard: bounding walls, 8 round pillars, 6 yaw-rotated boxes (planar or rigid)", [] {
+    EnvConfig e;
+    e.name = "planar_obstacles";
+    e.lower_bound_min_m = Vec3(-6, -6, 0);
+    e.lower_bound_max_m = Vec3(-6, -6, 0);
+    e.upper_bound_min_m = Vec3(6, 6, 2);
+    e.upper_bound_max_m = Vec3(6, 6, 2);
+    AssetClass walls = yard_asset("walls", AssetKind::wall, 5, 8, 0, 0);
+    walls.keep_in_env = true;
+    walls.min_num_assets = 5;
+    e.assets.push_back(walls);
+    AssetClass pillars = yard_asset("pillars", AssetKind::thin, 8, 6, 0.15_r, 0.35_r);
+    pillars.min_size_m[2] = pillars.max_size_m[2] = 2;  // full height (a cylinder of 2 m on rigid)
+    e.assets.push_back(pillars);
+    e.assets.push_back(yard_asset("boxes", AssetKind::cube, 6, 2, 0.4_r, 0.9_r));
+    return e;
+  });
+  r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
+    RobotConfig c;
+    c.name = "ground_vehicle";
+    c.kind = robots::RobotKind::ground_vehicle;
+    c.mass_kg = 3.5_r;
+    c.inertia_diag_kg_m2 = Vec3(0.03_r, 0.08_r, 0.1_r);
+    c.shape.type = ShapeType::box;
+    c.shape.half_extents_m = Vec3(0.25_r, 0.15_r, 0.1_r);
+    c.min_init_position_ratio = Vec3(0.05_r, 0.1_r, 0);
+    c.max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0);
+    // Starts facing into the yard (+-90 deg of +x): a car cannot turn on the spot, and a U-turn
+    // (radius L / tan(0.4) = 0.78 m plus the body) next to the start wall often hits it.
+    c.max_init_yaw_rad = kPi / 2;
+    return c;
+  });
+}
+
 }  // namespace
 
 // Long on purpose: the table of built-in presets, one entry per line (Crazyflie's and MuJoCo's
 // habit for registries); splitting it would scatter the table, not simplify it.
 void register_builtins(Registries& r) {
   register_sensors(r.sensors);
-  register_simulators(r);  // rigid, planar and the planar presets (sim/src/backends/simulator.cpp)
+  register_simulators(r);  // rigid, planar and the planar presets (below)
   r.sims.add("base_sim", "dt 0.01 s, 1 substep, gravity (0, 0, -9.81)", [] { return SimParams(); });
   r.sims.add("fast_sim", "dt 0.005 s, 1 substep", [] {
     SimParams s;

@@ -48,8 +48,6 @@
 
 namespace kestrel::sim {
 
-struct Registries;
-
 enum class Backend : std::uint8_t { rigid = 0, planar = 1 };
 const char* backend_name(Backend b);
 /// "rigid" / "planar"; false (out untouched) for anything else.
@@ -118,8 +116,9 @@ class Simulator {
   /// lin_vel_w (3), ang_vel_w (3). Controller and contact state are cleared; nothing else changes.
   /// False (nothing written, last_error() says why) for a non-finite or non-unit quaternion, a bad
   /// env id, or a state the backend cannot represent (planar: roll/pitch, or z off the plane).
-  [[nodiscard]] virtual bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
-                                               const real* lin_vel_w, const real* ang_vel_w) = 0;
+  /// The checks every backend makes are here; the backend's own (set_root_states) follow.
+  [[nodiscard]] bool reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
+                                       const real* lin_vel_w, const real* ang_vel_w);
   /// Renders the sensors now (step() already renders them at the configured rate).
   virtual void update_sensors() = 0;
   /// With auto-reset off, post_physics_step only flags reset_buf and leaves the ended episodes
@@ -210,6 +209,10 @@ class Simulator {
   void write_euler_view(std::size_t i) const;
   /// Runs the physics steps of every environment with the current actions.
   virtual void advance() = 0;
+  /// reset_root_states after the common checks (env ids in range, every value finite, unit
+  /// quaternions): the backend's own checks, then the writes; false (nothing written) on a refusal.
+  [[nodiscard]] virtual bool set_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
+                                             const real* lin_vel_w, const real* ang_vel_w) = 0;
   /// Sets robot i's world-frame linear velocity x and y (push_robots).
   virtual void set_velocity_xy(int env, int robot, real vx_w, real vy_w) = 0;
   /// Derived views a backend computes on demand: flag them in lazy_ when the state changes and
@@ -263,9 +266,5 @@ void scripted_setpoint_actions(const Simulator& sim, real* actions);
 /// `kestrel run` through this interface (sim/src/runtime/run_scripted.cpp): `steps` env-steps of
 /// scripted_setpoint_actions, a summary, DIR/trajectory.csv and the state hash. Returns the exit code.
 int run_scripted(Simulator& sim, const std::string& label, long long steps, const std::string& out_dir, bool quiet);
-
-/// Registers "rigid" and "planar" (simulators) and the planar presets: env "planar_obstacles",
-/// robot "ground_vehicle" (called from register_builtins).
-void register_simulators(Registries& r);
 
 }  // namespace kestrel::sim
