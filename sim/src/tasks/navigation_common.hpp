@@ -5,12 +5,13 @@
 
 #include <cmath>
 
+#include "kestrel/policy/observations.hpp"
 #include "kestrel/sim/navigation_task.hpp"
 
 namespace kestrel::sim::nav {
 
-constexpr int kActionDim = 4;
-constexpr int kStateObs = 17;  // goal direction (3), distance, roll, pitch, 0, v_b (3), w_b (3), actions (4)
+constexpr int kActionDim = policy::kNavigationActionDim;
+constexpr int kStateObs = policy::kNavigationStateObsDim;  // policy/observations.hpp builds them
 
 inline float norm3(const float v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 

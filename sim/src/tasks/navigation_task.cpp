@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/policy/observations.hpp"
 #include "navigation_common.hpp"
 #include "task_support.hpp"
 
@@ -67,15 +68,7 @@ void transform_action(const float in[kActionDim], const NavigationParams& p, flo
 
 void write_state_obs(const float e_v[3], float roll, float pitch, const float v_b[3], const float w_b[3],
                      const float action[kActionDim], float* o) {
-  const float d = norm3(e_v);
-  for (int k = 0; k < 3; ++k) o[k] = d > 1e-6f ? e_v[k] / d : 0.0f;
-  o[3] = d;
-  o[4] = roll;
-  o[5] = pitch;
-  o[6] = 0.0f;  // the reference zeroes the yaw slot
-  for (int k = 0; k < 3; ++k) o[7 + k] = v_b[k];
-  for (int k = 0; k < 3; ++k) o[10 + k] = w_b[k];
-  for (int k = 0; k < kActionDim; ++k) o[13 + k] = action[k];
+  policy::navigation_state_observation(e_v, roll, pitch, v_b, w_b, action, o);  // the firmware's builder too
 }
 
 // Velocity towards the goal at full speed, yawing to face it (so a forward sensor looks along

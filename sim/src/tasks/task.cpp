@@ -171,20 +171,9 @@ TaskConfig position_setpoint_task_config() {
   return t;
 }
 
+// The core's pooling (policy/observations.hpp), so a firmware pools its image with the same code.
 void min_pool_image(const RangeImage& img, int rows, int cols, float* out) {
-  for (int i = 0; i < rows; ++i) {
-    const int r0 = i * img.height / rows, r1 = (i + 1) * img.height / rows;
-    for (int j = 0; j < cols; ++j) {
-      const int c0 = j * img.width / cols, c1 = (j + 1) * img.width / cols;
-      real m = img.max_range_m;
-      for (int r = r0; r < r1; ++r)
-        for (int c = c0; c < c1; ++c) {
-          const real v = img.at(r, c);
-          if (v >= 0 && v < m) m = v;  // false for NaN: no return
-        }
-      out[i * cols + j] = static_cast<float>(img.max_range_m > 0 ? std::min(1.0_r, m / img.max_range_m) : 1.0_r);
-    }
-  }
+  policy::min_pool_ranges(img.ranges, img.height, img.width, img.row_step, img.col_step, img.max_range_m, rows, cols, out);
 }
 
 void min_pool_ranges(const real* ranges, int height, int width, real max_range_m, int rows, int cols, float* out) {

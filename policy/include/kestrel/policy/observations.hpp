@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
@@ -45,6 +46,47 @@ inline void position_setpoint_observation_vehicle_frame(const RigidBodyState& st
   const float c = a / n, s = b / n, ex = obs[0], ey = obs[1];
   obs[0] = c * ex + s * ey;
   obs[1] = -s * ex + c * ey;
+}
+
+/// Aerial Gym's navigation_task: the state part of its observation (the image part follows it).
+constexpr int kNavigationActionDim = 4;  // [vx, vy, vz, yaw_rate] after the task's scaling
+constexpr int kNavigationStateObsDim = 17;
+
+/// [unit goal direction (3), distance (m), roll, pitch, 0 (the reference zeroes the yaw slot),
+/// body linear velocity (3), body angular velocity (3), the scaled actions (4)] from the
+/// vehicle-frame position error `e_v`.
+inline void navigation_state_observation(const float e_v[3], float roll, float pitch, const float v_b[3], const float w_b[3],
+                                         const float action[kNavigationActionDim], float* o) {
+  const float d = std::sqrt(e_v[0] * e_v[0] + e_v[1] * e_v[1] + e_v[2] * e_v[2]);
+  for (int k = 0; k < 3; ++k) o[k] = d > 1e-6f ? e_v[k] / d : 0.0f;
+  o[3] = d;
+  o[4] = roll;
+  o[5] = pitch;
+  o[6] = 0.0f;
+  for (int k = 0; k < 3; ++k) o[7 + k] = v_b[k];
+  for (int k = 0; k < 3; ++k) o[10 + k] = w_b[k];
+  for (int k = 0; k < kNavigationActionDim; ++k) o[13 + k] = action[k];
+}
+
+/// The image part: a range image (row r, column c at ranges[r * row_step + c * col_step]) min-pooled
+/// into rows x cols cells, each the nearest valid range of its block over max_range_m, at most 1
+/// (negative and NaN ranges are no return; an empty block reads 1). Aerial Gym pools its depth
+/// image the same way before its VAE; a firmware pools its ToF zones with this.
+inline void min_pool_ranges(const real* ranges, int height, int width, std::ptrdiff_t row_step, std::ptrdiff_t col_step,
+                            real max_range_m, int rows, int cols, float* out) {
+  for (int i = 0; i < rows; ++i) {
+    const int r0 = i * height / rows, r1 = (i + 1) * height / rows;
+    for (int j = 0; j < cols; ++j) {
+      const int c0 = j * width / cols, c1 = (j + 1) * width / cols;
+      real m = max_range_m;
+      for (int r = r0; r < r1; ++r)
+        for (int c = c0; c < c1; ++c) {
+          const real v = ranges[r * row_step + c * col_step];
+          if (v >= 0 && v < m) m = v;  // false for NaN: no return
+        }
+      out[i * cols + j] = static_cast<float>(max_range_m > 0 ? (m / max_range_m < 1 ? m / max_range_m : real(1)) : real(1));
+    }
+  }
 }
 
 }  // namespace kestrel::policy
