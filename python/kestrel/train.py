@@ -65,7 +65,8 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
     dist = np.zeros(n)
     setpoint = env.task.name == "position_setpoint_task"
     # navigation_task: its observation 3 is the distance to the goal, so the first episode of each
-    # environment is told apart exactly: terminated within the success radius = success, else crash.
+    # environment is told apart exactly: a termination is a crash; a truncation (the time limit)
+    # within the success radius a success (Aerial Gym's rule), else a timeout.
     navigation = env.task.name == "navigation_task"
     radius = env.task.success_radius_m
     before = env.task.infos
@@ -84,8 +85,8 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
             if navigation:
                 d = info["final_obs"][ended, 3]
                 dist[ended] = d
-                success[ended] = te[ended] & (d < radius)
-                crash[ended] = te[ended] & ~(d < radius)
+                success[ended] = tr[ended] & ~te[ended] & (d < radius)
+                crash[ended] = te[ended]
             done |= ended
     if not setpoint and not navigation:  # the task's own counters over exactly the first episodes is not available: use its rates
         inf = env.task.infos

@@ -71,13 +71,16 @@ void write_state_obs(const float e_v[3], float roll, float pitch, const float v_
   policy::navigation_state_observation(e_v, roll, pitch, v_b, w_b, action, o);  // the firmware's builder too
 }
 
-// Velocity towards the goal at full speed, yawing to face it (so a forward sensor looks along
-// the path), with a reactive dodge read from the pooled image: when the central half of the
-// image sees something closer than 0.65 of the sensor's range, the command blends towards the
-// clearest side (left / right / up / down half of the image's central band) and slows down.
+// Velocity towards the goal, at full speed until 2 m from it and then proportionally less (an
+// episode succeeds only if it ends within the radius: arrive and stay), yawing to face it (so a
+// forward sensor looks along the path), with a reactive dodge read from the pooled image: when
+// the central half of the image sees something closer than 0.65 of the sensor's range, the
+// command blends towards the clearest side (left / right / up / down half of the image's central
+// band) and slows down.
 void scripted_action(const float* o, const float* img, int rows, int cols, bool vertical, float* a) {
   const int r0 = rows / 4, r1 = std::max(r0 + 1, rows - rows / 4), c0 = cols / 4, c1 = std::max(c0 + 1, cols - cols / 4);
-  for (int k = 0; k < 3; ++k) a[k] = o[k];
+  const float approach = std::min(1.0f, o[3] / 2.0f);  // o[3]: the distance to the goal, m
+  for (int k = 0; k < 3; ++k) a[k] = o[k] * approach;
   const float heading = std::atan2(o[1], o[0]);
   a[3] = std::min(1.0f, std::max(-1.0f, heading));
   float ahead = 1.0f;
@@ -109,7 +112,7 @@ void EpisodeBook::count(bool crash, bool success, double episode_reward, TaskInf
     ++infos.crashes;
     ++window_crashes;
   } else if (success) {
-    ++infos.terminations;
+    ++infos.truncations;  // a success is a truncation within the radius (the reference's rule)
     ++infos.successes;
     ++window_successes;
   } else {
@@ -198,13 +201,15 @@ class NavigationTask final : public Task {
       const float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
                                         &action_prev_[i * kNavActionDim], progress, p_.reward);
       for (int k = 0; k < 3; ++k) err_prev_[i * 3 + k] = e_v[k];
-      const bool success = !crash && norm3(e_v) < success_radius_m_;
-      const bool trunc = !crash && !success && episode_step_[i] >= len_;
+      // The reference's episode end: a crash terminates; the time limit truncates, a success
+      // when within the radius of the goal then (arriving does not end the episode).
+      const bool trunc = !crash && episode_step_[i] >= len_;
+      const bool success = trunc && norm3(e_v) < success_radius_m_;
       rewards_[i] = r;
-      terminations_[i] = (crash || success) ? 1 : 0;
+      terminations_[i] = crash ? 1 : 0;
       truncations_[i] = trunc ? 1 : 0;
       episode_reward_[i] += static_cast<double>(r);
-      ended_[i] = (crash || success || trunc) ? 1 : 0;
+      ended_[i] = (crash || trunc) ? 1 : 0;
       if (ended_[i]) book_.count(crash, success, episode_reward_[i], infos_);
     }
     // Curriculum before the resets, as the reference updates it before post_reward_calculation_step:

@@ -137,22 +137,33 @@ TEST(NavigationTask, ImageSeesTheGroundWhenPitchedDown) {
   for (float v : pool) EXPECT_EQ(v, 1.0f);
 }
 
-TEST(NavigationTask, SuccessTerminatesAndAutoResets) {
-  auto t = build(nav_config(2, 7));
+// The reference's episode end: arriving does not end the episode; at the time limit an episode
+// within the success radius is a success, the others time out; the ended rows auto-reset.
+TEST(NavigationTask, SuccessIsCountedAtTheTimeLimit) {
+  WorldConfig c = nav_config(2, 7);
+  c.task.episode_len_env_steps = 5;
+  auto t = build(c);
   ASSERT_TRUE(t);
   const Vec3 goal = world_of(*t).target(0, 0);
-  RigidBodyState& st = world_of(*t).robot_state(0, 0);
-  st.position_w = goal + Vec3(0.3_r, 0, 0);  // inside the 1 m success radius
+  world_of(*t).robot_state(0, 0).position_w = goal + Vec3(0.3_r, 0, 0);  // inside the 1 m radius
   const std::vector<float> zero(2 * 4, 0.0f);
+  for (int k = 1; k <= 4; ++k) {
+    t->step(zero.data());
+    EXPECT_EQ(t->terminations()[0], 0) << k;  // at the goal, still flying
+    EXPECT_EQ(t->truncations()[0], 0) << k;
+    EXPECT_GT(t->rewards()[0], 5.0f);  // the proximity terms keep paying
+  }
+  EXPECT_EQ(t->infos().episodes, 0u);
   t->step(zero.data());
-  EXPECT_EQ(t->terminations()[0], 1);
-  EXPECT_EQ(t->truncations()[0], 0);
-  EXPECT_EQ(t->terminations()[1], 0);
-  EXPECT_EQ(t->infos().successes, 1u);
+  EXPECT_EQ(t->terminations()[0], 0);
+  EXPECT_EQ(t->truncations()[0], 1);
+  EXPECT_EQ(t->truncations()[1], 1);
+  EXPECT_EQ(t->infos().successes, 1u);  // env 0 within the radius at the limit; env 1 timed out
   EXPECT_EQ(t->infos().crashes, 0u);
-  EXPECT_EQ(t->infos().episodes, 1u);
-  EXPECT_DOUBLE_EQ(t->infos().success_rate(), 1.0);
-  EXPECT_GT(t->rewards()[0], 5.0f);  // the proximity terms, not a penalty
+  EXPECT_EQ(t->infos().truncations, 2u);
+  EXPECT_EQ(t->infos().terminations, 0u);
+  EXPECT_EQ(t->infos().episodes, 2u);
+  EXPECT_DOUBLE_EQ(t->infos().success_rate(), 0.5);
   // The returned row is the new episode's first observation.
   EXPECT_EQ(world_of(*t).episode_step(0), 0);
   const real d_new = (world_of(*t).target(0, 0) - world_of(*t).robot_state(0, 0).position_w).norm();
@@ -249,12 +260,13 @@ TEST(NavigationTask, CurriculumFollowsSuccessRate) {
 
 TEST(NavigationTask, ScriptedBeatsZeroInObstacles) {
   WorldConfig c = nav_config(16, 13, "env_with_obstacles");
+  c.task.episode_len_env_steps = 1000;  // the default: successes are counted at the limit
   auto scripted = build(c);
   auto zero = build(c);
   ASSERT_TRUE(scripted && zero);
   std::vector<float> a(16 * 4, 0.0f);
   const std::vector<float> z(16 * 4, 0.0f);
-  for (int s = 0; s < 800; ++s) {
+  for (int s = 0; s < 1000; ++s) {
     ASSERT_TRUE(scripted->scripted_actions(a.data()));
     scripted->step(a.data());
     zero->step(z.data());

@@ -104,7 +104,9 @@ TEST(PlanarNavigationTask, VerticalActionDroppedOthersScaled) {
 }
 
 TEST(PlanarNavigationTask, SuccessCrashAndAutoReset) {
-  auto t = build(planar_nav(3, 3));
+  WorldConfig c = planar_nav(3, 3);
+  c.task.episode_len_env_steps = 3;
+  auto t = build(c);
   ASSERT_TRUE(t);
   const Simulator& s = t->simulator();
   // env 0 inside the success radius; env 1 far outside the bounds (an exit counts as a crash).
@@ -112,15 +114,20 @@ TEST(PlanarNavigationTask, SuccessCrashAndAutoReset) {
   place(*t, 1, 40, 40);
   const std::vector<float> zero(3 * 4, 0.0f);
   t->step(zero.data());
-  EXPECT_EQ(t->terminations()[0], 1);
-  EXPECT_EQ(t->truncations()[0], 0);
+  EXPECT_EQ(t->terminations()[0], 0);  // at the goal: the episode goes on (success is counted at the limit)
   EXPECT_GT(t->rewards()[0], 5.0f);
   EXPECT_EQ(t->terminations()[1], 1);
   EXPECT_EQ(t->rewards()[1], -100.0f);
   EXPECT_EQ(t->terminations()[2], 0);
+  EXPECT_EQ(t->infos().crashes, 1u);
+  EXPECT_EQ(t->infos().episodes, 1u);
+  t->step(zero.data());
+  t->step(zero.data());  // the limit: env 0 within the radius succeeds, env 2 times out
+  EXPECT_EQ(t->truncations()[0], 1);
+  EXPECT_EQ(t->truncations()[2], 1);
   EXPECT_EQ(t->infos().successes, 1u);
   EXPECT_EQ(t->infos().crashes, 1u);
-  EXPECT_EQ(t->infos().episodes, 2u);
+  EXPECT_EQ(t->infos().episodes, 3u);
   // The rows of the ended environments are their new episodes' first observations.
   for (int e = 0; e < 2; ++e) {
     const real dx = s.target_w()[3 * e] - s.base_pos_w()[3 * e], dy = s.target_w()[3 * e + 1] - s.base_pos_w()[3 * e + 1];
@@ -147,10 +154,12 @@ TEST(PlanarNavigationTask, TruncationAtEpisodeLength) {
 }
 
 TEST(PlanarNavigationTask, CurriculumFollowsSuccessRate) {
-  // Every episode a success (teleported onto the goal): after each window of 4 episodes the level
-  // rises by 2 and reaches the planar backend's layouts as the obstacle-count fraction.
+  // Every episode a success (teleported onto the goal at its last step, the time limit): after
+  // each window of 4 episodes the level rises by 2 and reaches the planar backend's layouts as the
+  // obstacle-count fraction.
   std::string err;
   WorldConfig c = planar_nav(4, 5);
+  c.task.episode_len_env_steps = 1;
   NavigationParams p;
   p.curriculum.check_after_episodes = 4;
   auto t = make_navigation_task(c, p, Backend::planar, err);

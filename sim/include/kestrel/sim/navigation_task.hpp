@@ -13,6 +13,12 @@
 //   - reward = compute_reward(): (1 + 2 p) (pos + very_close + getting_closer + (20 - d)/20)
 //     + action-difference penalties + p * absolute-action penalties, collision -> -100, with p the
 //     curriculum progress fraction and the reference's constants (NavigationRewardParams);
+//   - episode end: a crash terminates; the time limit truncates, and an episode truncated within
+//     success_radius_m of the goal (TaskConfig::success_radius_m, the reference's 1 m) is a
+//     success (infos.successes), else a timeout. Reaching the goal does not end the episode: the
+//     reward stays positive near it, so the robot is paid to get there and stay (a version that
+//     ended the episode on arrival taught PPO to hover just outside the radius, where the reward
+//     kept coming: bench/results/python/README.md);
 //   - obstacle curriculum: success / crash / timeout counts aggregated until check_after_episodes
 //     episodes ended, then level +increase_step if the success rate > success_rate_for_increase,
 //     -decrease_step if < success_rate_for_decrease, clamped to [min_level, max_level]
@@ -24,9 +30,6 @@
 //     by max_speed_m_s and max_yaw_rate_rad_s (the reference's commented-out
 //     action_transformation_function; its active one is for the lmf2's 3-input velocity
 //     controller, not available here);
-//   - success ends the episode at once (terminated, counted in infos.successes) when the robot is
-//     within success_radius_m (TaskConfig::success_radius_m, 1 m as the reference's check); the
-//     reference only counts a success at truncation time within 1 m;
 //   - the goal is placed clear of obstacles (World placement, TaskConfig::clearance_m; no line of
 //     sight needed): the reference's uniform draw may put it inside an obstacle;
 //   - no observation noise (the reference adds uniform noise to the goal vector and the angles
