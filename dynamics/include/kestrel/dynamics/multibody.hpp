@@ -1,0 +1,236 @@
+// Kinematic trees of rigid bodies with a fixed base and their dynamics, after R. Featherstone,
+// "Rigid Body Dynamics Algorithms", Springer 2008 (RBDA):
+//   rnea  inverse dynamics, the recursive Newton-Euler algorithm (RBDA table 5.1);
+//   crba  the joint-space mass matrix, the composite-rigid-body algorithm (RBDA table 6.2);
+//   aba   forward dynamics, the articulated-body algorithm (RBDA table 7.1).
+// Each is a free function over a read-only model and a data object of fixed capacity, as
+// Pinocchio's algorithms over (Model, Data): no heap, no exceptions, float or double.
+//
+// Bodies are numbered so that a body's parent has a smaller index (-1: the fixed base, whose
+// frame is the world frame, z up). Body i hangs from its parent by joint i: a revolute or
+// prismatic joint with one degree of freedom along `axis` (a unit vector in the joint frame), or a
+// fixed joint with none. The joint frame sits at X_tree[i] in the parent's frame; body i's frame
+// is the joint frame moved by the joint: X_J(q) (rotation about / translation along the axis).
+// Capacities are template parameters; the degrees of freedom are numbered in body order.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "kestrel/dynamics/spatial.hpp"
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/status.hpp"
+
+namespace kestrel::dynamics {
+
+enum class JointType : std::uint8_t { revolute = 0, prismatic = 1, fixed = 2 };
+
+template <int kMaxBodies>
+struct MultibodyModel {
+  static_assert(kMaxBodies > 0, "a tree needs room for a body");
+  static constexpr int max_bodies = kMaxBodies;
+  int num_bodies = 0;
+  int num_dofs = 0;                   // set by finish_model
+  int parent[kMaxBodies] = {};        // -1: the base
+  JointType joint[kMaxBodies] = {};
+  Vec3 axis[kMaxBodies];              // unit, joint frame
+  Transform X_tree[kMaxBodies];       // parent frame -> joint frame
+  SpatialInertia body[kMaxBodies];    // in the body's frame
+  int dof_index[kMaxBodies] = {};     // first dof of joint i (set by finish_model; -1 for fixed)
+  Vec3 gravity_w = Vec3(0, 0, -9.81_r);
+};
+
+template <int kMaxBodies>
+struct MultibodyData {
+  Transform Xup[kMaxBodies];  // parent frame -> body frame at the current q
+  Vec6 S[kMaxBodies];         // joint motion subspace (zero for fixed joints)
+  Vec6 v[kMaxBodies], a[kMaxBodies], f[kMaxBodies], c[kMaxBodies], pA[kMaxBodies], U[kMaxBodies];
+  Mat6 IA[kMaxBodies];
+  real d[kMaxBodies] = {}, u[kMaxBodies] = {};
+};
+
+/// Numbers the degrees of freedom and checks the model: parents before children, unit axes,
+/// positive masses and finite, symmetric positive semi-definite inertias with a positive diagonal.
+/// invalid_argument otherwise (the model is then unusable).
+template <int N>
+[[nodiscard]] Status finish_model(MultibodyModel<N>& m) {
+  if (m.num_bodies < 1 || m.num_bodies > N || !all_finite(m.gravity_w)) return Status::invalid_argument;
+  int dof = 0;
+  for (int i = 0; i < m.num_bodies; ++i) {
+    if (m.parent[i] < -1 || m.parent[i] >= i) return Status::invalid_argument;
+    if (m.joint[i] != JointType::revolute && m.joint[i] != JointType::prismatic && m.joint[i] != JointType::fixed)
+      return Status::invalid_argument;
+    const SpatialInertia& b = m.body[i];
+    if (!(b.mass > 0) || !is_finite(b.mass) || !all_finite(b.com) || !all_finite(b.inertia_com) ||
+        !all_finite(m.X_tree[i].E) || !all_finite(m.X_tree[i].r))
+      return Status::invalid_argument;
+    const Mat3& I = b.inertia_com;
+    if (!(I(0, 0) > 0 && I(1, 1) > 0 && I(2, 2) > 0) || !(I - I.transpose()).isZero(real(1e-6) * I.trace()))
+      return Status::invalid_argument;
+    if (m.joint[i] == JointType::fixed) {
+      m.dof_index[i] = -1;
+      continue;
+    }
+    if (!all_finite(m.axis[i]) || std::fabs(m.axis[i].norm() - 1) > real(1e-4)) return Status::invalid_argument;
+    m.dof_index[i] = dof++;
+  }
+  m.num_dofs = dof;
+  return Status::ok;
+}
+
+namespace detail {
+/// X_J(q) and the motion subspace S of joint i (RBDA table 4.1: revolute E = rot(axis, q)^T,
+/// prismatic r = axis q).
+template <int N>
+inline void joint_transform(const MultibodyModel<N>& m, int i, real q, Transform& XJ, Vec6& S) {
+  const Vec3& a = m.axis[i];
+  XJ = Transform();
+  switch (m.joint[i]) {
+    case JointType::revolute: {
+      const real c = std::cos(q), s = std::sin(q), t = 1 - c;
+      Mat3 R;  // rotation by q about a (Rodrigues)
+      R << t * a[0] * a[0] + c, t * a[0] * a[1] - s * a[2], t * a[0] * a[2] + s * a[1],  //
+          t * a[0] * a[1] + s * a[2], t * a[1] * a[1] + c, t * a[1] * a[2] - s * a[0],   //
+          t * a[0] * a[2] - s * a[1], t * a[1] * a[2] + s * a[0], t * a[2] * a[2] + c;
+      XJ.E = R.transpose();
+      S = spatial(a, Vec3::Zero());
+      return;
+    }
+    case JointType::prismatic:
+      XJ.r = a * q;
+      S = spatial(Vec3::Zero(), a);
+      return;
+    case JointType::fixed:
+      S = Vec6::Zero();
+      return;
+  }
+}
+
+/// Xup and S of every body at q.
+template <int N>
+inline void update_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q) {
+  for (int i = 0; i < m.num_bodies; ++i) {
+    Transform XJ;
+    const int k = m.dof_index[i];
+    joint_transform(m, i, k >= 0 ? q[k] : real(0), XJ, d.S[i]);
+    d.Xup[i] = compose(XJ, m.X_tree[i]);
+  }
+}
+
+/// The base's acceleration that stands for gravity (RBDA section 5.3: a_0 = -g).
+template <int N>
+inline Vec6 base_acceleration(const MultibodyModel<N>& m) {
+  return spatial(Vec3::Zero(), -m.gravity_w);
+}
+
+/// X^T I X for a 6 x 6 inertia in the child's frame carried to the parent's.
+inline Mat6 to_parent(const Transform& X, const Mat6& I) {
+  const Mat6 M = motion_matrix(X);
+  return M.transpose() * I * M;
+}
+}  // namespace detail
+
+/// Inverse dynamics: the joint forces (N m, N) tau[num_dofs] that give the accelerations qdd at
+/// (q, qd) under gravity, with an optional external force per body (f_ext[i], body frame, RBDA's
+/// [n; f]; nullptr: none).
+template <int N>
+void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* qdd, real* tau,
+          const Vec6* f_ext = nullptr) {
+  detail::update_kinematics(m, d, q);
+  const Vec6 a0 = detail::base_acceleration(m);
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    const Vec6 vJ = k >= 0 ? Vec6(d.S[i] * qd[k]) : Vec6::Zero();
+    const Vec6 vp = p >= 0 ? d.v[p] : Vec6::Zero();
+    const Vec6 ap = p >= 0 ? d.a[p] : a0;
+    d.v[i] = apply_motion(d.Xup[i], vp) + vJ;
+    d.a[i] = apply_motion(d.Xup[i], ap) + cross_motion(d.v[i], vJ);
+    if (k >= 0) d.a[i] += d.S[i] * qdd[k];
+    d.f[i] = inertia_times(m.body[i], d.a[i]) + cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
+    if (f_ext != nullptr) d.f[i] -= f_ext[i];
+  }
+  for (int i = m.num_bodies - 1; i >= 0; --i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    if (k >= 0) tau[k] = d.S[i].dot(d.f[i]);
+    if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
+  }
+}
+
+/// The joint-space mass matrix H (num_dofs x num_dofs, row-major in H[ld * row + col], ld >=
+/// num_dofs), symmetric positive definite for a valid model.
+template <int N>
+void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld) {
+  detail::update_kinematics(m, d, q);
+  for (int i = 0; i < m.num_bodies; ++i) d.IA[i] = inertia_matrix(m.body[i]);  // composite inertias
+  for (int i = m.num_bodies - 1; i >= 0; --i)
+    if (m.parent[i] >= 0) d.IA[m.parent[i]] += detail::to_parent(d.Xup[i], d.IA[i]);
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i];
+    if (k < 0) continue;
+    Vec6 F = d.IA[i] * d.S[i];
+    H[ld * k + k] = d.S[i].dot(F);
+    for (int j = i; m.parent[j] >= 0;) {
+      F = apply_force_transpose(d.Xup[j], F);
+      j = m.parent[j];
+      const int kj = m.dof_index[j];
+      if (kj < 0) continue;
+      H[ld * k + kj] = H[ld * kj + k] = F.dot(d.S[j]);
+    }
+  }
+}
+
+/// Forward dynamics: the accelerations qdd[num_dofs] under the joint forces tau at (q, qd), with
+/// optional external forces as rnea. Status::ok; non_finite_input (qdd untouched) for a
+/// non-finite input or a singular articulated inertia (a joint with no inertia behind it).
+template <int N>
+[[nodiscard]] Status aba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* tau,
+                         real* qdd, const Vec6* f_ext = nullptr) {
+  const int n = m.num_dofs;
+  if (!all_finite(q, n) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
+  detail::update_kinematics(m, d, q);
+  // Pass 1, base to tips: velocities, velocity-product accelerations, bias forces.
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    const Vec6 vJ = k >= 0 ? Vec6(d.S[i] * qd[k]) : Vec6::Zero();
+    d.v[i] = (p >= 0 ? apply_motion(d.Xup[i], d.v[p]) : Vec6::Zero()) + vJ;
+    d.c[i] = cross_motion(d.v[i], vJ);
+    d.IA[i] = inertia_matrix(m.body[i]);
+    d.pA[i] = cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
+    if (f_ext != nullptr) d.pA[i] -= f_ext[i];
+  }
+  // Pass 2, tips to base: articulated inertias and bias forces.
+  for (int i = m.num_bodies - 1; i >= 0; --i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    Mat6 Ia = d.IA[i];
+    Vec6 pa = d.pA[i];
+    if (k >= 0) {
+      d.U[i] = d.IA[i] * d.S[i];
+      d.d[i] = d.S[i].dot(d.U[i]);
+      if (!(d.d[i] > 0)) return Status::non_finite_input;
+      d.u[i] = tau[k] - d.S[i].dot(d.pA[i]);
+      Ia -= d.U[i] * d.U[i].transpose() / d.d[i];
+      pa += Ia * d.c[i] + d.U[i] * (d.u[i] / d.d[i]);
+    } else {
+      pa += Ia * d.c[i];
+    }
+    if (p >= 0) {
+      d.IA[p] += detail::to_parent(d.Xup[i], Ia);
+      d.pA[p] += apply_force_transpose(d.Xup[i], pa);
+    }
+  }
+  // Pass 3, base to tips: accelerations.
+  const Vec6 a0 = detail::base_acceleration(m);
+  real out[N];
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    d.a[i] = apply_motion(d.Xup[i], p >= 0 ? d.a[p] : a0) + d.c[i];
+    if (k < 0) continue;
+    out[k] = (d.u[i] - d.U[i].dot(d.a[i])) / d.d[i];
+    d.a[i] += d.S[i] * out[k];
+  }
+  if (!all_finite(out, n)) return Status::non_finite_input;
+  for (int k = 0; k < n; ++k) qdd[k] = out[k];
+  return Status::ok;
+}
+
+}  // namespace kestrel::dynamics

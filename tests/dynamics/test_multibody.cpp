@@ -1,0 +1,169 @@
+// Articulated-body dynamics of the core (dynamics/multibody.hpp), on the host and the emulated
+// MCU: a pendulum against its closed form; random trees of revolute, prismatic and fixed joints
+// where ABA inverts RNEA, CRBA's mass matrix is symmetric positive definite, reproduces RNEA's
+// torques (H qdd + bias = tau) and the kinetic energy; refusals; no heap.
+#include <cmath>
+#include <limits>
+
+#include "kestrel/dynamics/multibody.hpp"
+#include "kestrel/kernel/rng.hpp"
+#include "ktest.hpp"
+
+using namespace kestrel;
+namespace dy = kestrel::dynamics;
+
+namespace {
+
+// Relative tolerances: float32 builds (the MCU default) and double builds.
+constexpr double kTol = sizeof(real) == 4 ? 2e-3 : 1e-9;
+
+dy::SpatialInertia body(real m, const Vec3& com, const Vec3& diag) {
+  dy::SpatialInertia b;
+  b.mass = m;
+  b.com = com;
+  b.inertia_com = diag.asDiagonal();
+  return b;
+}
+
+// A random unit vector / rotation / tree from a counter-based stream (the same on every target).
+Vec3 unit(RngStream& r) {
+  Vec3 v(r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1));
+  if (v.norm() < real(0.1)) v = Vec3(0, 0, 1);
+  return v / v.norm();
+}
+
+template <int N>
+void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream) {
+  RngStream r(2026, stream, 1);
+  m.num_bodies = bodies;
+  for (int i = 0; i < bodies; ++i) {
+    m.parent[i] = i == 0 ? -1 : static_cast<int>(r.uniform(0, static_cast<real>(i) - real(0.001)));
+    const real kind = r.uniform(0, 1);
+    m.joint[i] = kind < real(0.6) ? dy::JointType::revolute : kind < real(0.85) ? dy::JointType::prismatic : dy::JointType::fixed;
+    if (i == 0 && m.joint[i] == dy::JointType::fixed) m.joint[i] = dy::JointType::revolute;
+    m.axis[i] = unit(r);
+    const Vec3 a = unit(r);
+    const real angle = r.uniform(-3, 3);
+    m.X_tree[i].E = Eigen::AngleAxis<real>(angle, a).toRotationMatrix();
+    m.X_tree[i].r = Vec3(r.uniform(-0.3_r, 0.3_r), r.uniform(-0.3_r, 0.3_r), r.uniform(-0.3_r, 0.3_r));
+    // A principal inertia turned by a random rotation: symmetric positive definite.
+    const Mat3 R = Eigen::AngleAxis<real>(r.uniform(-3, 3), unit(r)).toRotationMatrix();
+    const Vec3 p(r.uniform(0.01_r, 0.1_r), r.uniform(0.01_r, 0.1_r), r.uniform(0.01_r, 0.1_r));
+    m.body[i] = body(r.uniform(0.2_r, 3), Vec3(r.uniform(-0.1_r, 0.1_r), r.uniform(-0.1_r, 0.1_r), r.uniform(-0.1_r, 0.1_r)), p);
+    m.body[i].inertia_com = R * p.asDiagonal() * R.transpose();
+    m.body[i].inertia_com = real(0.5) * (m.body[i].inertia_com + m.body[i].inertia_com.transpose());
+  }
+}
+
+constexpr int kMax = 8;
+dy::MultibodyModel<kMax> g_model;
+dy::MultibodyData<kMax> g_data;
+
+}  // namespace
+
+KTEST(Multibody, PendulumMatchesItsClosedForm) {
+  // A rod of mass m, centre of mass L below a revolute joint about y: (Iyy + m L^2) qdd = -m g L sin q.
+  dy::MultibodyModel<2> p;
+  p.num_bodies = 1;
+  p.parent[0] = -1;
+  p.joint[0] = dy::JointType::revolute;
+  p.axis[0] = Vec3(0, 1, 0);
+  const real mass = 1.5_r, L = 0.4_r, Iyy = 0.02_r;
+  p.body[0] = body(mass, Vec3(0, 0, -L), Vec3(0.02_r, Iyy, 0.01_r));
+  KASSERT_TRUE(dy::finish_model(p) == Status::ok);
+  KEXPECT_EQ(p.num_dofs, 1);
+  dy::MultibodyData<2> d;
+  const real g = 9.81_r;
+  for (real q : {0.0_r, 0.3_r, 1.2_r, -2.5_r}) {
+    const real qd = 0.7_r, tau = 0.1_r;
+    real qdd = 0;
+    KEXPECT_TRUE(dy::aba(p, d, &q, &qd, &tau, &qdd) == Status::ok);
+    const real want = (tau - mass * g * L * std::sin(q)) / (Iyy + mass * L * L);
+    KEXPECT_NEAR(qdd, want, kTol * 10);
+    real back = 0;
+    dy::rnea(p, d, &q, &qd, &qdd, &back);
+    KEXPECT_NEAR(back, tau, kTol * 10);
+    real H = 0;
+    dy::crba(p, d, &q, &H, 1);
+    KEXPECT_NEAR(H, Iyy + mass * L * L, kTol);
+  }
+}
+
+KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
+  for (std::uint32_t tree = 0; tree < 20; ++tree) {
+    dy::MultibodyModel<kMax>& m = g_model;
+    m = dy::MultibodyModel<kMax>();
+    random_tree(m, 3 + static_cast<int>(tree % 6), tree);
+    KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+    const int n = m.num_dofs;
+    RngStream r(7, tree, 2);
+    real q[kMax], qd[kMax], qdd[kMax], tau[kMax], bias[kMax], zero[kMax] = {}, back[kMax];
+    for (int k = 0; k < n; ++k) {
+      q[k] = r.uniform(-2, 2);
+      qd[k] = r.uniform(-2, 2);
+      qdd[k] = r.uniform(-3, 3);
+    }
+    dy::rnea(m, g_data, q, qd, qdd, tau);
+    Status st = Status::invalid_argument;
+    KEXPECT_NO_HEAP(st = dy::aba(m, g_data, q, qd, tau, back));
+    KEXPECT_TRUE(st == Status::ok);
+    for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
+    // H qdd + bias(q, qd) = tau, H symmetric positive definite, 1/2 qd^T H qd = kinetic energy.
+    dy::rnea(m, g_data, q, qd, zero, bias);
+    real H[kMax * kMax] = {};
+    dy::crba(m, g_data, q, H, kMax);
+    Eigen::Matrix<real, kMax, kMax> Hm = Eigen::Matrix<real, kMax, kMax>::Identity();
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) Hm(i, j) = H[kMax * i + j];
+    real scale = 0;
+    for (int k = 0; k < n; ++k) scale = std::max(scale, std::fabs(tau[k]));
+    for (int i = 0; i < n; ++i) {
+      real s = bias[i];
+      for (int j = 0; j < n; ++j) s += H[kMax * i + j] * qdd[j];
+      KEXPECT_NEAR(s, tau[i], kTol * 10 * (1 + scale));
+      for (int j = 0; j < n; ++j) KEXPECT_NEAR(H[kMax * i + j], H[kMax * j + i], kTol * 10);
+    }
+    Eigen::LLT<Eigen::Matrix<real, kMax, kMax>> llt(Hm);
+    KEXPECT_TRUE(llt.info() == Eigen::Success);
+    real ke_joint = 0, ke_bodies = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kMax * i + j] * qd[j];
+    dy::rnea(m, g_data, q, qd, zero, bias);  // leaves the body velocities in g_data.v
+    for (int b = 0; b < m.num_bodies; ++b) ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
+    KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
+  }
+}
+
+KTEST(Multibody, RefusesBadModelsAndInputs) {
+  dy::MultibodyModel<2> m;
+  m.num_bodies = 2;
+  m.parent[0] = -1;
+  m.parent[1] = 0;
+  m.joint[0] = m.joint[1] = dy::JointType::revolute;
+  m.axis[0] = m.axis[1] = Vec3(0, 0, 1);
+  m.body[0] = m.body[1] = body(1, Vec3::Zero(), Vec3(0.1_r, 0.1_r, 0.1_r));
+  KEXPECT_TRUE(dy::finish_model(m) == Status::ok);
+  KEXPECT_EQ(m.num_dofs, 2);
+  dy::MultibodyModel<2> bad = m;
+  bad.parent[1] = 1;  // its own parent
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  bad = m;
+  bad.axis[1] = Vec3(0, 0, 2);
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  bad = m;
+  bad.body[0].mass = 0;
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  bad = m;
+  bad.body[1].inertia_com(0, 1) = 1;  // not symmetric
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  bad = m;
+  bad.num_bodies = 3;  // over the capacity
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  dy::MultibodyData<2> d;
+  const real q[2] = {0.1_r, 0.2_r}, qd[2] = {0, 0};
+  const real nan_tau[2] = {0, std::numeric_limits<real>::quiet_NaN()};
+  real qdd[2] = {42, 42};
+  KEXPECT_TRUE(dy::aba(m, d, q, qd, nan_tau, qdd) == Status::non_finite_input);
+  KEXPECT_EQ(qdd[0], 42);  // untouched
+  KEXPECT_EQ(qdd[1], 42);
+}
