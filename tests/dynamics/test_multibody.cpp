@@ -110,7 +110,8 @@ KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
     for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
     // H qdd + bias(q, qd) = tau, H symmetric positive definite, 1/2 qd^T H qd = kinetic energy.
     dy::rnea(m, g_data, q, qd, zero, bias);
-    real H[kMax * kMax] = {};
+    real H[kMax * kMax];
+    for (real& h : H) h = std::numeric_limits<real>::quiet_NaN();  // crba writes every entry it owns
     dy::crba(m, g_data, q, H, kMax);
     Eigen::Matrix<real, kMax, kMax> Hm = Eigen::Matrix<real, kMax, kMax>::Identity();
     for (int i = 0; i < n; ++i)

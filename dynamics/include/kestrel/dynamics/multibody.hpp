@@ -157,9 +157,12 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
 }
 
 /// The joint-space mass matrix H (num_dofs x num_dofs, row-major in H[ld * row + col], ld >=
-/// num_dofs), symmetric positive definite for a valid model.
+/// num_dofs, every entry written: zero between joints on different branches), symmetric
+/// positive definite for a valid model.
 template <int N>
 void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld) {
+  for (int r = 0; r < m.num_dofs; ++r)
+    for (int c = 0; c < m.num_dofs; ++c) H[ld * r + c] = 0;
   detail::update_kinematics(m, d, q);
   for (int i = 0; i < m.num_bodies; ++i) d.IA[i] = inertia_matrix(m.body[i]);  // composite inertias
   for (int i = m.num_bodies - 1; i >= 0; --i)
