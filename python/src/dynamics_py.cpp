@@ -2,10 +2,12 @@
 // crba, aba) over a tree given as arrays, for the oracle tests against Pinocchio and for users
 // who want the core's numbers from Python. Arrays are the core's real (float32 by default).
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 
 #include "kestrel/dynamics/multibody.hpp"
 
@@ -58,7 +60,7 @@ void bind_dynamics(nb::module_& m) {
       .def(
           "__init__",
           [](PyMultibody* self, Ints parent, Ints joint, Arr axis, Arr E_tree, Arr r_tree, Arr mass, Arr com, Arr inertia,
-             Arr gravity) {
+             Arr gravity, std::optional<Arr> armature, std::optional<Arr> damping) {
             const std::size_t n = parent.shape(0);
             need(n >= 1 && n <= static_cast<std::size_t>(kPyMaxBodies),
                  "parent: expected 1 to " + std::to_string(kPyMaxBodies) + " bodies");
@@ -70,6 +72,8 @@ void bind_dynamics(nb::module_& m) {
             need_shape(com, {n, 3}, "com");
             need_shape(inertia, {n, 3, 3}, "inertia");
             need_shape(gravity, {3}, "gravity");
+            if (armature) need_shape(*armature, {n}, "armature");
+            if (damping) need_shape(*damping, {n}, "damping");
             new (self) PyMultibody();
             dy::MultibodyModel<kPyMaxBodies>& md = self->model;
             md.num_bodies = static_cast<int>(n);
@@ -86,13 +90,16 @@ void bind_dynamics(nb::module_& m) {
                 }
               }
               md.body[i].mass = mass.data()[i];
+              if (armature) md.armature[i] = armature->data()[i];
+              if (damping) md.damping[i] = damping->data()[i];
             }
             md.gravity_w = kestrel::Vec3(gravity.data()[0], gravity.data()[1], gravity.data()[2]);
             need(dy::finish_model(md) == kestrel::Status::ok,
                  "Multibody: invalid tree (expected parent[i] in [-1, i), joint 0/1/2, unit axes, positive masses, "
                  "finite symmetric inertias with a positive diagonal)");
           },
-          "parent"_a, "joint"_a, "axis"_a, "E_tree"_a, "r_tree"_a, "mass"_a, "com"_a, "inertia"_a, "gravity"_a)
+          "parent"_a, "joint"_a, "axis"_a, "E_tree"_a, "r_tree"_a, "mass"_a, "com"_a, "inertia"_a, "gravity"_a,
+          "armature"_a = nb::none(), "damping"_a = nb::none())
       .def_prop_ro("num_dofs", [](const PyMultibody& s) { return s.model.num_dofs; })
       .def(
           "rnea",
@@ -129,5 +136,23 @@ void bind_dynamics(nb::module_& m) {
             nb::capsule owner(H, [](void* p) noexcept { delete[] static_cast<real*>(p); });
             return nb::ndarray<nb::numpy, real, nb::ndim<2>>(H, {n, n}, owner);
           },
-          "q"_a, "The joint-space mass matrix (CRBA).");
+          "q"_a, "The joint-space mass matrix (CRBA).")
+      .def(
+          "point_jacobian",
+          [](PyMultibody& s, Arr q, int body, Arr point) {
+            const std::size_t n = static_cast<std::size_t>(s.model.num_dofs);
+            need_shape(q, {n}, "q");
+            need_shape(point, {3}, "point");
+            need(body >= 0 && body < s.model.num_bodies, "body: expected an index in [0, " + std::to_string(s.model.num_bodies) + ")");
+            dy::Transform X_world[kPyMaxBodies];
+            dy::forward_kinematics(s.model, s.data, q.data(), X_world);
+            real* J = new real[6 * n];
+            dy::point_jacobian(s.model, s.data, X_world, body, kestrel::Vec3(point.data()[0], point.data()[1], point.data()[2]), J,
+                               static_cast<int>(n));
+            nb::capsule owner(J, [](void* p) noexcept { delete[] static_cast<real*>(p); });
+            return nb::ndarray<nb::numpy, real, nb::ndim<2>>(J, {6, n}, owner);
+          },
+          "q"_a, "body"_a, "point"_a,
+          "The Jacobian (6, num_dofs) of a point fixed on a body (body frame): rows linear velocity of the point, "
+          "angular velocity of the body, in world coordinates.");
 }

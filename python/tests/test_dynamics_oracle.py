@@ -40,9 +40,10 @@ def random_tree(rng: np.random.Generator, n: int):
     return parent, joint, axis, E, r, mass, com, inertia
 
 
-def pinocchio_model(parent, joint, axis, E, r, mass, com, inertia, gravity):
+def pinocchio_model(parent, joint, axis, E, r, mass, com, inertia, gravity, armature=None):
     """The same tree in Pinocchio: a movable joint per revolute / prismatic body; a fixed body's
-    inertia appended to its parent's joint at its placement (Pinocchio merges fixed links so)."""
+    inertia appended to its parent's joint at its placement (Pinocchio merges fixed links so).
+    Returns the model and, per body, (joint id, the body frame's placement in that joint's frame)."""
     model = pin.Model()
     model.gravity.linear = gravity
     owner = []  # per body: (pinocchio joint id, the body frame's placement in that joint's frame)
@@ -58,7 +59,9 @@ def pinocchio_model(parent, joint, axis, E, r, mass, com, inertia, gravity):
         jid = model.addJoint(p_joint, jm, place, f"j{i}")
         model.appendBodyToJoint(jid, body_inertia, pin.SE3.Identity())
         owner.append((jid, pin.SE3.Identity()))
-    return model
+    if armature is not None:  # per dof, in body order (the movable joints')
+        model.armature = np.array([armature[i] for i in range(len(parent)) if joint[i] != FIXED])
+    return model, owner
 
 
 def test_rnea_aba_crba_agree_with_pinocchio():
@@ -69,8 +72,10 @@ def test_rnea_aba_crba_agree_with_pinocchio():
     for tree in range(10):
         arrays = random_tree(rng, 3 + tree % 8)
         f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
-        core = kestrel._core.Multibody(*f32, gravity=gravity.astype(np.float32))
-        model = pinocchio_model(*arrays, gravity)
+        # Half the trees with rotor inertia (armature), which both add to the mass matrix's diagonal.
+        armature = rng.uniform(0, 0.05, len(arrays[0])).astype(np.float32) if tree % 2 else np.zeros(len(arrays[0]), np.float32)
+        core = kestrel._core.Multibody(*f32, gravity=gravity.astype(np.float32), armature=armature)
+        model, _ = pinocchio_model(*arrays, gravity, armature=armature.astype(np.float64))
         data = model.createData()
         n = core.num_dofs
         assert model.nq == n and model.nv == n
@@ -111,7 +116,39 @@ def test_refuses_bad_trees_with_the_argument_named():
     bad[2] = 3  # a parent after its child
     with pytest.raises(ValueError, match="invalid tree"):
         kestrel._core.Multibody(bad, joint, axis, E, r, mass, com, inertia, g)
+    with pytest.raises(ValueError, match="invalid tree"):
+        kestrel._core.Multibody(parent, joint, axis, E, r, mass, com, inertia, g, damping=np.full(4, -1, np.float32))
     core = kestrel._core.Multibody(parent, joint, axis, E, r, mass, com, inertia, g)
     n = core.num_dofs
     with pytest.raises(ValueError, match="non-finite"):
         core.aba(np.zeros(n, np.float32), np.zeros(n, np.float32), np.full(n, np.nan, np.float32))
+    with pytest.raises(ValueError, match="body: expected an index"):
+        core.point_jacobian(np.zeros(n, np.float32), 9, np.zeros(3, np.float32))
+
+
+def test_point_jacobians_agree_with_pinocchio():
+    """The Jacobian of a random point on every body (world-aligned, linear rows first) against
+    Pinocchio's frame Jacobian (LOCAL_WORLD_ALIGNED) at a frame placed on that point."""
+    rng = np.random.default_rng(21)
+    g = np.array([0.0, 0.0, -9.81])
+    worst = 0.0
+    checked = 0
+    for tree in range(8):
+        arrays = random_tree(rng, 3 + tree % 6)
+        f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
+        core = kestrel._core.Multibody(*f32, gravity=g.astype(np.float32))
+        model, owner = pinocchio_model(*arrays, g)
+        points = rng.uniform(-0.2, 0.2, (len(owner), 3)).astype(np.float32)
+        frames = [model.addFrame(pin.Frame(f"p{b}", jid, place * pin.SE3(np.eye(3), points[b].astype(np.float64)), pin.FrameType.OP_FRAME))
+                  for b, (jid, place) in enumerate(owner)]
+        data = model.createData()
+        for _ in range(20):
+            q32 = rng.uniform(-2, 2, core.num_dofs).astype(np.float32)
+            q = q32.astype(np.float64)
+            for b, fid in enumerate(frames):
+                J_ref = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+                J = core.point_jacobian(q32, b, points[b])
+                worst = max(worst, np.abs(J - J_ref).max() / (1 + np.abs(J_ref).max()))
+                checked += 1
+    assert checked > 500
+    assert worst < 2e-5, worst

@@ -1,7 +1,8 @@
 // Articulated-body dynamics of the core (dynamics/multibody.hpp), on the host and the emulated
 // MCU: a pendulum against its closed form; random trees of revolute, prismatic and fixed joints
-// where ABA inverts RNEA, CRBA's mass matrix is symmetric positive definite, reproduces RNEA's
-// torques (H qdd + bias = tau) and the kinetic energy; refusals; no heap.
+// (half with armature and joint damping) where ABA inverts RNEA, CRBA's mass matrix is symmetric
+// positive definite and reproduces RNEA's torques (H qdd + bias = tau); the kinetic energy; point
+// Jacobians against the twists of RNEA's forward pass; refusals; no heap.
 #include <cmath>
 #include <limits>
 
@@ -52,6 +53,8 @@ void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream) {
     m.body[i] = body(r.uniform(0.2_r, 3), Vec3(r.uniform(-0.1_r, 0.1_r), r.uniform(-0.1_r, 0.1_r), r.uniform(-0.1_r, 0.1_r)), p);
     m.body[i].inertia_com = R * p.asDiagonal() * R.transpose();
     m.body[i].inertia_com = real(0.5) * (m.body[i].inertia_com + m.body[i].inertia_com.transpose());
+    m.armature[i] = stream % 2 == 0 ? r.uniform(0, 0.05_r) : 0;  // half the trees with rotor inertia and damping
+    m.damping[i] = stream % 2 == 0 ? r.uniform(0, 0.5_r) : 0;
   }
 }
 
@@ -130,8 +133,51 @@ KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kMax * i + j] * qd[j];
     dy::rnea(m, g_data, q, qd, zero, bias);  // leaves the body velocities in g_data.v
-    for (int b = 0; b < m.num_bodies; ++b) ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
+    for (int b = 0; b < m.num_bodies; ++b) {
+      ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
+      const int k = m.dof_index[b];
+      if (k >= 0) ke_bodies += real(0.5) * m.armature[b] * qd[k] * qd[k];  // the rotors' own energy
+    }
     KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
+  }
+}
+
+// The Jacobian of a point on each body, times the joint velocities, is the point's velocity that
+// RNEA's forward pass gives (body-frame twist carried to the world), on random trees.
+KTEST(Multibody, PointJacobianGivesThePointVelocity) {
+  static dy::Transform X_world[kMax];
+  for (std::uint32_t tree = 0; tree < 10; ++tree) {
+    dy::MultibodyModel<kMax>& m = g_model;
+    m = dy::MultibodyModel<kMax>();
+    random_tree(m, 3 + static_cast<int>(tree % 6), 100 + tree);
+    KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+    const int n = m.num_dofs;
+    RngStream r(9, tree, 3);
+    real q[kMax], qd[kMax], zero[kMax] = {}, tau[kMax];
+    for (int k = 0; k < n; ++k) {
+      q[k] = r.uniform(-2, 2);
+      qd[k] = r.uniform(-2, 2);
+    }
+    dy::rnea(m, g_data, q, qd, zero, tau);  // leaves the body twists in g_data.v
+    dy::MultibodyData<kMax> d2;
+    dy::forward_kinematics(m, d2, q, X_world);
+    for (int b = 0; b < m.num_bodies; ++b) {
+      const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
+      real J[6 * kMax];
+      dy::point_jacobian(m, d2, X_world, b, p_b, J, kMax);
+      const Mat3 Et = X_world[b].E.transpose();
+      const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
+      const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;
+      for (int a = 0; a < 3; ++a) {
+        real jv = 0, jw = 0;
+        for (int k = 0; k < n; ++k) {
+          jv += J[kMax * a + k] * qd[k];
+          jw += J[kMax * (3 + a) + k] * qd[k];
+        }
+        KEXPECT_NEAR(jv, want_v[a], kTol * 20 * (1 + want_v.norm()));
+        KEXPECT_NEAR(jw, want_w[a], kTol * 20 * (1 + want_w.norm()));
+      }
+    }
   }
 }
 
@@ -156,6 +202,9 @@ KTEST(Multibody, RefusesBadModelsAndInputs) {
   KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
   bad = m;
   bad.body[1].inertia_com(0, 1) = 1;  // not symmetric
+  KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
+  bad = m;
+  bad.damping[1] = -1;
   KEXPECT_TRUE(dy::finish_model(bad) == Status::invalid_argument);
   bad = m;
   bad.num_bodies = 3;  // over the capacity

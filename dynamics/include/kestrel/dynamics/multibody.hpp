@@ -2,7 +2,8 @@
 // "Rigid Body Dynamics Algorithms", Springer 2008 (RBDA):
 //   rnea  inverse dynamics, the recursive Newton-Euler algorithm (RBDA table 5.1);
 //   crba  the joint-space mass matrix, the composite-rigid-body algorithm (RBDA table 6.2);
-//   aba   forward dynamics, the articulated-body algorithm (RBDA table 7.1).
+//   aba   forward dynamics, the articulated-body algorithm (RBDA table 7.1);
+//   forward_kinematics, point_jacobian  body poses and the Jacobian of any point of any body.
 // Each is a free function over a read-only model and a data object of fixed capacity, as
 // Pinocchio's algorithms over (Model, Data): no heap, no exceptions, float or double.
 //
@@ -37,6 +38,11 @@ struct MultibodyModel {
   Transform X_tree[kMaxBodies];       // parent frame -> joint frame
   SpatialInertia body[kMaxBodies];    // in the body's frame
   int dof_index[kMaxBodies] = {};     // first dof of joint i (set by finish_model; -1 for fixed)
+  // Per joint: the reflected rotor inertia (kg m^2 or kg, added to the mass matrix's diagonal, as
+  // MuJoCo's and Pinocchio's armature) and viscous damping (N m s/rad or N s/m: a joint force
+  // -damping * qd).
+  real armature[kMaxBodies] = {};
+  real damping[kMaxBodies] = {};
   Vec3 gravity_w = Vec3(0, 0, -9.81_r);
 };
 
@@ -72,6 +78,8 @@ template <int N>
       continue;
     }
     if (!all_finite(m.axis[i]) || std::fabs(m.axis[i].norm() - 1) > real(1e-4)) return Status::invalid_argument;
+    if (!(m.armature[i] >= 0) || !is_finite(m.armature[i]) || !(m.damping[i] >= 0) || !is_finite(m.damping[i]))
+      return Status::invalid_argument;
     m.dof_index[i] = dof++;
   }
   m.num_dofs = dof;
@@ -151,7 +159,7 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
   }
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
-    if (k >= 0) tau[k] = d.S[i].dot(d.f[i]);
+    if (k >= 0) tau[k] = d.S[i].dot(d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
     if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
   }
 }
@@ -171,7 +179,7 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
     const int k = m.dof_index[i];
     if (k < 0) continue;
     Vec6 F = d.IA[i] * d.S[i];
-    H[ld * k + k] = d.S[i].dot(F);
+    H[ld * k + k] = d.S[i].dot(F) + m.armature[i];
     for (int j = i; m.parent[j] >= 0;) {
       F = apply_force_transpose(d.Xup[j], F);
       j = m.parent[j];
@@ -208,9 +216,9 @@ template <int N>
     Vec6 pa = d.pA[i];
     if (k >= 0) {
       d.U[i] = d.IA[i] * d.S[i];
-      d.d[i] = d.S[i].dot(d.U[i]);
+      d.d[i] = d.S[i].dot(d.U[i]) + m.armature[i];
       if (!(d.d[i] > 0)) return Status::non_finite_input;
-      d.u[i] = tau[k] - d.S[i].dot(d.pA[i]);
+      d.u[i] = tau[k] - m.damping[i] * qd[k] - d.S[i].dot(d.pA[i]);
       Ia -= d.U[i] * d.U[i].transpose() / d.d[i];
       pa += Ia * d.c[i] + d.U[i] * (d.u[i] / d.d[i]);
     } else {
@@ -234,6 +242,40 @@ template <int N>
   if (!all_finite(out, n)) return Status::non_finite_input;
   for (int k = 0; k < n; ++k) qdd[k] = out[k];
   return Status::ok;
+}
+
+/// Every body's pose in the world: X_world[i] maps world coordinates to body i's (Plücker
+/// transform world -> body; r is the body origin in world coordinates, E^T its orientation).
+template <int N>
+void forward_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, Transform* X_world) {
+  detail::update_kinematics(m, d, q);
+  for (int i = 0; i < m.num_bodies; ++i)
+    X_world[i] = m.parent[i] >= 0 ? compose(d.Xup[i], X_world[m.parent[i]]) : d.Xup[i];
+}
+
+/// The Jacobian of a point fixed on a body: J (6 x num_dofs, row-major in J[ld * row + col])
+/// with rows [linear velocity of the point (3); angular velocity of the body (3)], both in world
+/// coordinates (Pinocchio's LOCAL_WORLD_ALIGNED frame Jacobian, rows in its linear-first order).
+/// `X_world` from forward_kinematics at the same q; `point_b` in the body's frame.
+template <int N>
+void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const Transform* X_world, int body,
+                    const Vec3& point_b, real* J, int ld) {
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < m.num_dofs; ++c) J[ld * r + c] = 0;
+  const Vec3 p_w = X_world[body].r + X_world[body].E.transpose() * point_b;
+  for (int j = body; j >= 0; j = m.parent[j]) {
+    const int k = m.dof_index[j];
+    if (k < 0) continue;
+    // Joint j's motion subspace in world coordinates: angular w, linear v at the world origin.
+    const Mat3 Et = X_world[j].E.transpose();
+    const Vec3 w = Et * ang(d.S[j]);
+    const Vec3 v = Et * lin(d.S[j]) + X_world[j].r.cross(w);
+    const Vec3 v_p = v + w.cross(p_w);
+    for (int a = 0; a < 3; ++a) {
+      J[ld * a + k] = v_p[a];
+      J[ld * (3 + a) + k] = w[a];
+    }
+  }
 }
 
 }  // namespace kestrel::dynamics
