@@ -23,7 +23,7 @@ import os
 from typing import Any, Mapping
 
 from . import _core
-from ._core import Config, Simulator, Task, box2d_hooks_active, load_scenario_file, load_scenario_string
+from ._core import Config, Multibody, Simulator, Task, box2d_hooks_active, load_scenario_file, load_scenario_string
 
 __all__ = [
     "Config",

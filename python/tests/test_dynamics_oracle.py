@@ -74,7 +74,7 @@ def test_rnea_aba_crba_agree_with_pinocchio():
         f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
         # Half the trees with rotor inertia (armature), which both add to the mass matrix's diagonal.
         armature = rng.uniform(0, 0.05, len(arrays[0])).astype(np.float32) if tree % 2 else np.zeros(len(arrays[0]), np.float32)
-        core = kestrel._core.Multibody(*f32, gravity=gravity.astype(np.float32), armature=armature)
+        core = kestrel.Multibody(*f32, gravity=gravity.astype(np.float32), armature=armature)
         model, _ = pinocchio_model(*arrays, gravity, armature=armature.astype(np.float64))
         data = model.createData()
         n = core.num_dofs
@@ -118,7 +118,7 @@ def test_refuses_bad_trees_with_the_argument_named():
         kestrel._core.Multibody(bad, joint, axis, E, r, mass, com, inertia, g)
     with pytest.raises(ValueError, match="invalid tree"):
         kestrel._core.Multibody(parent, joint, axis, E, r, mass, com, inertia, g, damping=np.full(4, -1, np.float32))
-    core = kestrel._core.Multibody(parent, joint, axis, E, r, mass, com, inertia, g)
+    core = kestrel.Multibody(parent, joint, axis, E, r, mass, com, inertia, g)
     n = core.num_dofs
     with pytest.raises(ValueError, match="non-finite"):
         core.aba(np.zeros(n, np.float32), np.zeros(n, np.float32), np.full(n, np.nan, np.float32))
@@ -136,7 +136,7 @@ def test_point_jacobians_agree_with_pinocchio():
     for tree in range(8):
         arrays = random_tree(rng, 3 + tree % 6)
         f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
-        core = kestrel._core.Multibody(*f32, gravity=g.astype(np.float32))
+        core = kestrel.Multibody(*f32, gravity=g.astype(np.float32))
         model, owner = pinocchio_model(*arrays, g)
         points = rng.uniform(-0.2, 0.2, (len(owner), 3)).astype(np.float32)
         frames = [model.addFrame(pin.Frame(f"p{b}", jid, place * pin.SE3(np.eye(3), points[b].astype(np.float64)), pin.FrameType.OP_FRAME))
