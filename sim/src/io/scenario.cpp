@@ -153,6 +153,14 @@ void apply_task(const YAML::Node& n, TaskConfig& t) {
     if (!cur.IsMap()) bad("task.curriculum", "expected a map of " + std::string(curriculum_schema().doc));
     apply_schema(cur, "task.curriculum", curriculum_schema(), t.curriculum);
   }
+  if (const YAML::Node nav = n["navigation"]) {
+    if (!nav.IsMap()) bad("task.navigation", "expected a map of max_speed_m_s, max_yaw_rate_rad_s, pool_rows, pool_cols, reward");
+    apply_schema(nav, "task.navigation", navigation_schema(), t.navigation);
+    if (const YAML::Node r = nav["reward"]) {
+      if (!r.IsMap()) bad("task.navigation.reward", "expected a map of the reward's constants");
+      apply_schema(r, "task.navigation.reward", navigation_reward_schema(), t.navigation.reward);
+    }
+  }
 }
 
 void parse_sim(const YAML::Node& n, SimParams& s) {

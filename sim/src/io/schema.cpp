@@ -339,9 +339,54 @@ const Schema<TaskConfig>& task_schema() {
                "candidate (start, target) pairs drawn per reset"),
       real_f<S>("setpoint_speed_m_s", &S::setpoint_speed_m_s, "m/s", 0, 1000, "moving setpoint speed towards the target (0: the target)"),
   };
-  static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"}};
+  static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"},
+                                     {"navigation", "navigation_task's action scaling, pooling and reward (section task.navigation)"}};
   static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f),
                            st, std::size(st)};
+  return s;
+}
+
+const Schema<NavigationConfig>& navigation_schema() {
+  using S = NavigationConfig;
+  static const Field<S> f[] = {
+      real_f<S>("max_speed_m_s", &S::max_speed_m_s, "m/s", 1e-3, 100, "actions [-1, 1] x this: the vx, vy, vz commands"),
+      real_f<S>("max_yaw_rate_rad_s", &S::max_yaw_rate_rad_s, "rad/s", 0, 100, "actions [-1, 1] x this: the yaw-rate command"),
+      int_f<S>("pool_rows", &S::pool_rows, 1, 64, nullptr, "range image min-pooled to pool_rows x pool_cols observation cells"),
+      int_f<S>("pool_cols", &S::pool_cols, 1, 64, nullptr, ""),
+  };
+  static const StructuralKey st[] = {{"reward", "the reward's constants (section task.navigation.reward)"}};
+  static const Schema<S> s{"task.navigation", "navigation_task's actions, image observation and reward", f, std::size(f), st,
+                           std::size(st)};
+  return s;
+}
+
+const Schema<NavigationRewardParams>& navigation_reward_schema() {
+  using S = NavigationRewardParams;
+  constexpr double kBig = 1e6;
+#define KESTREL_REWARD_ROW(name, doc) real_f<S>(#name, &S::name, "", -kBig, kBig, doc)
+  static const Field<S> f[] = {
+      KESTREL_REWARD_ROW(pos_reward_magnitude, "magnitude x exp(-d^2 x exponent), d the distance to the goal (m)"),
+      KESTREL_REWARD_ROW(pos_reward_exponent, ""),
+      KESTREL_REWARD_ROW(very_close_to_goal_reward_magnitude, "the same, sharper near the goal"),
+      KESTREL_REWARD_ROW(very_close_to_goal_reward_exponent, ""),
+      KESTREL_REWARD_ROW(getting_closer_reward_multiplier, "x the distance gained this step (twice that when it is lost)"),
+      KESTREL_REWARD_ROW(x_action_diff_penalty_magnitude, "penalties on the change of each action from the last step"),
+      KESTREL_REWARD_ROW(x_action_diff_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(z_action_diff_penalty_magnitude, ""),
+      KESTREL_REWARD_ROW(z_action_diff_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(yawrate_action_diff_penalty_magnitude, ""),
+      KESTREL_REWARD_ROW(yawrate_action_diff_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(x_absolute_action_penalty_magnitude, "penalties on each action's size, x the curriculum progress"),
+      KESTREL_REWARD_ROW(x_absolute_action_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(z_absolute_action_penalty_magnitude, ""),
+      KESTREL_REWARD_ROW(z_absolute_action_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(yawrate_absolute_action_penalty_magnitude, ""),
+      KESTREL_REWARD_ROW(yawrate_absolute_action_penalty_exponent, ""),
+      KESTREL_REWARD_ROW(collision_penalty, "the reward of a crash (the episode ends)"),
+  };
+#undef KESTREL_REWARD_ROW
+  static const Schema<S> s{"task.navigation.reward", "Aerial Gym's navigation_task_config.reward_parameters (float32)", f,
+                           std::size(f), nullptr, 0};
   return s;
 }
 
@@ -478,7 +523,9 @@ bool check_config_fields(const WorldConfig& c, std::string& error) {
   if (!check_fields(sim_schema(), c.sim, "sim", error) || !check_fields(simulator_schema(), c.simulator, "simulator", error) ||
       !check_fields(env_schema(), c.env, "env", error) || !check_fields(terrain_schema(), c.env.terrain, "env.terrain", error) ||
       !check_fields(robot_schema(), c.robot, "robot", error) || !check_fields(shape_schema(), c.robot.shape, "robot.collision_shape", error) ||
-      !check_fields(task_schema(), c.task, "task", error) || !check_fields(curriculum_schema(), c.task.curriculum, "task.curriculum", error))
+      !check_fields(task_schema(), c.task, "task", error) || !check_fields(curriculum_schema(), c.task.curriculum, "task.curriculum", error) ||
+      !check_fields(navigation_schema(), c.task.navigation, "task.navigation", error) ||
+      !check_fields(navigation_reward_schema(), c.task.navigation.reward, "task.navigation.reward", error))
     return false;
   for (const AssetClass& a : c.env.assets)
     if (!check_fields(asset_schema(), a, "env.assets." + a.name, error)) return false;
@@ -504,6 +551,8 @@ std::string scenario_reference_markdown() {
   document(out, controller_schema());
   document(out, task_schema());
   document(out, curriculum_schema());
+  document(out, navigation_schema());
+  document(out, navigation_reward_schema());
   return out.str();
 }
 

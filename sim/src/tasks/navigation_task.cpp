@@ -26,23 +26,25 @@ float exp_penalty(float magnitude, float exponent, float v) { return magnitude *
 
 float navigation_reward(const float e[3], const float e_prev[3], bool crash, const float a[4], const float a_prev[4],
                         float progress, const NavigationRewardParams& p) {
-  if (crash) return p.collision_penalty;
+  // The constants in float32, as the reference computes (the same bits in a double build).
+  const auto f = [](real v) { return static_cast<float>(v); };
+  if (crash) return f(p.collision_penalty);
   const float mult = 1.0f + 2.0f * progress;
   const float dist = norm3(e), prev_dist = norm3(e_prev);
-  const float pos_reward = exp_reward(p.pos_reward_magnitude, p.pos_reward_exponent, dist);
-  const float very_close = exp_reward(p.very_close_to_goal_reward_magnitude, p.very_close_to_goal_reward_exponent, dist);
+  const float pos_reward = exp_reward(f(p.pos_reward_magnitude), f(p.pos_reward_exponent), dist);
+  const float very_close = exp_reward(f(p.very_close_to_goal_reward_magnitude), f(p.very_close_to_goal_reward_exponent), dist);
   const float closer = prev_dist - dist;
-  const float closer_reward = closer > 0 ? p.getting_closer_reward_multiplier * closer
-                                         : 2.0f * p.getting_closer_reward_multiplier * closer;
+  const float closer_reward = closer > 0 ? f(p.getting_closer_reward_multiplier) * closer
+                                         : 2.0f * f(p.getting_closer_reward_multiplier) * closer;
   const float distance_reward = (20.0f - dist) / 20.0f;
   const float dx = a[0] - a_prev[0], dz = a[2] - a_prev[2], dyaw = a[3] - a_prev[3];
-  const float diff_penalty = exp_penalty(p.x_action_diff_penalty_magnitude, p.x_action_diff_penalty_exponent, dx) +
-                             exp_penalty(p.z_action_diff_penalty_magnitude, p.z_action_diff_penalty_exponent, dz) +
-                             exp_penalty(p.yawrate_action_diff_penalty_magnitude, p.yawrate_action_diff_penalty_exponent, dyaw);
+  const float diff_penalty = exp_penalty(f(p.x_action_diff_penalty_magnitude), f(p.x_action_diff_penalty_exponent), dx) +
+                             exp_penalty(f(p.z_action_diff_penalty_magnitude), f(p.z_action_diff_penalty_exponent), dz) +
+                             exp_penalty(f(p.yawrate_action_diff_penalty_magnitude), f(p.yawrate_action_diff_penalty_exponent), dyaw);
   const float abs_penalty =
-      progress * exp_penalty(p.x_absolute_action_penalty_magnitude, p.x_absolute_action_penalty_exponent, a[0]) +
-      progress * exp_penalty(p.z_absolute_action_penalty_magnitude, p.z_absolute_action_penalty_exponent, a[2]) +
-      progress * exp_penalty(p.yawrate_absolute_action_penalty_magnitude, p.yawrate_absolute_action_penalty_exponent, a[3]);
+      progress * exp_penalty(f(p.x_absolute_action_penalty_magnitude), f(p.x_absolute_action_penalty_exponent), a[0]) +
+      progress * exp_penalty(f(p.z_absolute_action_penalty_magnitude), f(p.z_absolute_action_penalty_exponent), a[2]) +
+      progress * exp_penalty(f(p.yawrate_absolute_action_penalty_magnitude), f(p.yawrate_absolute_action_penalty_exponent), a[3]);
   return mult * (pos_reward + very_close + closer_reward + distance_reward) + (diff_penalty + abs_penalty);
 }
 

@@ -224,6 +224,12 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
   if (id == "position_setpoint_task") return make_position_setpoint_task(config, backend, error);
   if (id == "navigation_task") {
     NavigationParams p;
+    const NavigationConfig& nc = config.task.navigation;
+    p.max_speed_m_s = static_cast<float>(nc.max_speed_m_s);
+    p.max_yaw_rate_rad_s = static_cast<float>(nc.max_yaw_rate_rad_s);
+    p.pool_rows = nc.pool_rows;
+    p.pool_cols = nc.pool_cols;
+    p.reward = nc.reward;
     p.curriculum = config.task.curriculum;
     return make_navigation_task(config, p, backend, error);
   }

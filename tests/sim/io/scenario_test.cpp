@@ -258,7 +258,41 @@ void every_row(const Schema<S>& sc, const char* preset, S WorldConfig::*member) 
   }
 }
 
+/// The same for a nested section of task: `wrap` puts "key: value" inside the section's map, `get`
+/// reads the struct back from the parsed config.
+template <class S, class Wrap, class Get>
+void every_nested_row(const Schema<S>& sc, Wrap wrap, Get get) {
+  for (std::size_t k = 0; k < sc.count; ++k) {
+    const Field<S>& f = sc.fields[k];
+    double expect = 0;
+    const std::string text = wrap(std::string(f.key) + ": " + valid_yaml(f, expect));
+    WorldConfig c;
+    std::string err;
+    ASSERT_TRUE(load_scenario_string(text, "s.yaml", c, err)) << text << err;
+    expect_field(f, get(c), expect, text);
+    if (f.type == FieldType::real_number || (f.type == FieldType::integer && f.hi >= f.lo)) {
+      const std::string bad_text = wrap(std::string(f.key) + ": 1e12");
+      EXPECT_NE(error_of(bad_text).find(std::string(sc.section) + "." + f.key + ": expected"), std::string::npos) << bad_text;
+    }
+  }
+}
+
 }  // namespace
+
+TEST(SimScenario, NestedTaskSectionsAreReachable) {
+  const auto task = [](const std::string& inner) { return "task: {name: navigation_task, " + inner + "}\n"; };
+  every_nested_row(
+      curriculum_schema(), [&](const std::string& kv) { return task("curriculum: {" + kv + "}"); },
+      [](const WorldConfig& c) -> const CurriculumConfig& { return c.task.curriculum; });
+  every_nested_row(
+      navigation_schema(), [&](const std::string& kv) { return task("navigation: {" + kv + "}"); },
+      [](const WorldConfig& c) -> const NavigationConfig& { return c.task.navigation; });
+  every_nested_row(
+      navigation_reward_schema(), [&](const std::string& kv) { return task("navigation: {reward: {" + kv + "}}"); },
+      [](const WorldConfig& c) -> const NavigationRewardParams& { return c.task.navigation.reward; });
+  EXPECT_NE(error_of(task("navigation: {max_sped_m_s: 1}")).find("task.navigation.max_sped_m_s: unknown field"), std::string::npos);
+  EXPECT_NE(error_of(task("navigation: {reward: 3}")).find("task.navigation.reward"), std::string::npos);
+}
 
 TEST(SimScenario, EverySchemaRowIsReachableUnderItsOwnName) {
   every_row(sim_schema(), "base_sim", &WorldConfig::sim);

@@ -370,3 +370,26 @@ TEST(NavigationTask, CurriculumFromTheScenario) {
   EXPECT_NE(err.find("task.curriculum: expected min_level <= max_level"), std::string::npos) << err;
   EXPECT_NE(err.find("min_level 5, max_level 2"), std::string::npos) << err;
 }
+
+// task.navigation from a scenario reaches the task: the action scaling, the pool grid (and so the
+// observation size) and the reward constants.
+TEST(NavigationTask, NavigationSectionFromTheScenario) {
+  std::string err;
+  WorldConfig s;
+  ASSERT_TRUE(load_scenario_string("task: {name: navigation_task, navigation: {max_speed_m_s: 1.5, max_yaw_rate_rad_s: 0.5,\n"
+                                   "       pool_rows: 4, pool_cols: 2, reward: {collision_penalty: -50}}}\n"
+                                   "env: {name: env_with_obstacles, num_envs: 2}\n",
+                                   "nav.yaml", s, err))
+      << err;
+  auto t = make_task(s, err);
+  ASSERT_TRUE(t) << err;
+  EXPECT_EQ(t->obs_dim(), 17 + 8);
+  const float a[8] = {1, 0, 0, 1, 0, 0, 0, 0};
+  t->step(a);
+  EXPECT_FLOAT_EQ(t->observations()[13], 1.5f);  // the scaled actions in the observation
+  EXPECT_FLOAT_EQ(t->observations()[16], 0.5f);
+  world_of(*t).robot_state(1, 0).position_w[2] = 0.05_r;  // into the ground: a crash
+  t->step(a);
+  EXPECT_EQ(t->terminations()[1], 1);
+  EXPECT_EQ(t->rewards()[1], -50.0f);
+}

@@ -195,6 +195,29 @@ struct CurriculumConfig {
   real success_rate_for_increase = 0.7_r, success_rate_for_decrease = 0.6_r;
 };
 
+/// navigation_task's reward constants (task.navigation.reward): Aerial Gym's
+/// navigation_task_config.reward_parameters, evaluated in float32 in its expression order.
+struct NavigationRewardParams {
+  real pos_reward_magnitude = 5.0f, pos_reward_exponent = 1.0f / 3.5f;
+  real very_close_to_goal_reward_magnitude = 5.0f, very_close_to_goal_reward_exponent = 2.0f;
+  real getting_closer_reward_multiplier = 10.0f;
+  real x_action_diff_penalty_magnitude = 0.8f, x_action_diff_penalty_exponent = 3.333f;
+  real z_action_diff_penalty_magnitude = 0.8f, z_action_diff_penalty_exponent = 5.0f;
+  real yawrate_action_diff_penalty_magnitude = 0.8f, yawrate_action_diff_penalty_exponent = 3.33f;
+  real x_absolute_action_penalty_magnitude = 0.1f, x_absolute_action_penalty_exponent = 0.3f;
+  real z_absolute_action_penalty_magnitude = 1.5f, z_absolute_action_penalty_exponent = 1.0f;
+  real yawrate_absolute_action_penalty_magnitude = 1.5f, yawrate_absolute_action_penalty_exponent = 2.0f;
+  real collision_penalty = -100.0f;
+};
+
+/// navigation_task's action scaling, image pooling and reward (task.navigation).
+struct NavigationConfig {
+  real max_speed_m_s = 2.0f;              // actions [-1, 1] -> velocity commands
+  real max_yaw_rate_rad_s = 1.0471976f;   // pi / 3
+  int pool_rows = 8, pool_cols = 8;       // the range image min-pooled to rows x cols cells
+  NavigationRewardParams reward;
+};
+
 struct TaskConfig {
   std::string name = "position_setpoint";
   TaskKind kind = TaskKind::position_setpoint;
@@ -218,6 +241,7 @@ struct TaskConfig {
   // 10 m step with the default Lee gains).
   real setpoint_speed_m_s = 0;
   CurriculumConfig curriculum;  // read by the tasks with a curriculum (navigation_task)
+  NavigationConfig navigation;  // read by navigation_task
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env
 

@@ -48,19 +48,8 @@
 
 namespace kestrel::sim {
 
-/// navigation_task_config.reward_parameters.
-struct NavigationRewardParams {
-  float pos_reward_magnitude = 5.0f, pos_reward_exponent = 1.0f / 3.5f;
-  float very_close_to_goal_reward_magnitude = 5.0f, very_close_to_goal_reward_exponent = 2.0f;
-  float getting_closer_reward_multiplier = 10.0f;
-  float x_action_diff_penalty_magnitude = 0.8f, x_action_diff_penalty_exponent = 3.333f;
-  float z_action_diff_penalty_magnitude = 0.8f, z_action_diff_penalty_exponent = 5.0f;
-  float yawrate_action_diff_penalty_magnitude = 0.8f, yawrate_action_diff_penalty_exponent = 3.33f;
-  float x_absolute_action_penalty_magnitude = 0.1f, x_absolute_action_penalty_exponent = 0.3f;
-  float z_absolute_action_penalty_magnitude = 1.5f, z_absolute_action_penalty_exponent = 1.0f;
-  float yawrate_absolute_action_penalty_magnitude = 1.5f, yawrate_absolute_action_penalty_exponent = 2.0f;
-  float collision_penalty = -100.0f;
-};
+/// navigation_task_config.reward_parameters: NavigationRewardParams (sim/config.hpp, the scenario's
+/// task.navigation.reward).
 
 /// navigation_task_config.curriculum (levels rescaled, see above): the scenario's task.curriculum.
 using NavigationCurriculum = CurriculumConfig;

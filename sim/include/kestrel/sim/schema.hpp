@@ -63,6 +63,8 @@ const Schema<ShapeSpec>& shape_schema();
 const Schema<ControllerConfig>& controller_schema();
 const Schema<TaskConfig>& task_schema();
 const Schema<CurriculumConfig>& curriculum_schema();
+const Schema<NavigationConfig>& navigation_schema();
+const Schema<NavigationRewardParams>& navigation_reward_schema();
 
 /// The same ranges for a config built in code (C++, tests) rather than read from a file: every
 /// field of every schema within its allowed values, vectors finite, ranges ordered; assets and
