@@ -118,7 +118,7 @@ KTEST(PolicyMlp, ForwardMatchesDoubleReference) {
     RngStream r(12, 0, kPurposeUser);
     double worst = 0;
     for (int n = 0; n < 500; ++n) {
-      real obs[13], action[4];
+      real obs[13], action[4] = {};
       for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-3, 3);
       Status st = Status::invalid_argument;
       KEXPECT_NO_HEAP(st = pl::mlp_forward(g_mlp, obs, action));
@@ -296,7 +296,7 @@ KTEST(PolicyMlp, SameBitsOnEveryTarget) {
     random_mlp(g_mlp, static_cast<pl::Activation>(a), 21);
     RngStream r(22, 0, kPurposeUser);
     for (int n = 0; n < 1000; ++n) {
-      real obs[13], action[4];
+      real obs[13], action[4] = {};
       for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-4, 4);
       if (pl::mlp_forward(g_mlp, obs, action) != Status::ok) h ^= 0xdead;
       unsigned char b[sizeof action];
