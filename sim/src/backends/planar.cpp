@@ -510,11 +510,10 @@ class PlanarSimulator final : public Simulator {
     s.mean_tracking_error_m = s.env_steps > 0 ? err / (static_cast<double>(s.env_steps) * robots_per_env_) : 0;
     s.final_mean_distance_m = final_dist / static_cast<double>(num_robots());
     s.episode_end_distance_m = s.episodes_done > 0 ? end_dist / static_cast<double>(s.episodes_done) : 0;
-    // As the rigid World: the union of every robot's latched controller / chain faults, and the
-    // non-ok statuses met while resetting.
+    // As the rigid World: the union of every robot's latched controller / chain faults (the
+    // non-ok statuses met while resetting come with the per-environment counters above).
     for (std::size_t i = 0; i < static_cast<std::size_t>(num_robots()); ++i)
       s.fault_bits |= ground_ ? steer_[i].faults.bits : robots::multirotor_faults(mr_state_[i]);
-    s.reset_errors = reset_errors_;
     return s;
   }
 
@@ -743,14 +742,15 @@ class PlanarSimulator final : public Simulator {
     if (ground_) {
       steer_[i].gain_scale = gain_scale_[i];  // the table's reset keeps the caller's gain draw
       if (control_reset(ControllerKind::velocity_steering, steering_params(vs_), steering_state(i), nullptr) != Status::ok)
-        ++reset_errors_;
+        ++env_of(i).stats.reset_errors;
       return;
     }
     real hover[al::kMaxRotors] = {};
     const real per_motor = mass(i) * kStandardGravity / static_cast<real>(mr_.airframe.num_rotors);
     for (int m = 0; m < mr_.airframe.num_rotors; ++m) hover[m] = per_motor;
     robots::MultirotorState& mr = mr_state_[i];
-    if (robots::multirotor_reset(mr_, mr, &rng, rng, hover) != Status::ok) ++reset_errors_;  // valid model and hover: none expected
+    // Valid model and hover: none expected. Counted per environment (resets run on the workers).
+    if (robots::multirotor_reset(mr_, mr, &rng, rng, hover) != Status::ok) ++env_of(i).stats.reset_errors;
     // Domain randomisation over the drawn state: controller gains and motor time constants.
     LeeGains& g = mr.ctrl.lee.gains;
     g.k_pos *= gain_scale_[i];
@@ -1044,7 +1044,7 @@ class PlanarSimulator final : public Simulator {
   real half_x_ = 0, half_y_ = 0, radius_ = 0, bound_r_ = 0, plane_z_ = 0;
   std::vector<int> class_first_slot_;  // per asset class: its first slot in Env::slots
   std::vector<VelocitySteeringState> steer_;
-  std::uint64_t reset_errors_ = 0;  // non-ok statuses of the core's resets (summary().reset_errors)
+  Env& env_of(std::size_t robot) { return envs_[robot / static_cast<std::size_t>(robots_per_env_)]; }
   static ControllerParamsRef steering_params(const VelocitySteeringParams& p) {
     ControllerParamsRef r;
     r.steering = &p;

@@ -18,6 +18,7 @@ struct EnvStats {
   double tracking_error_sum_m = 0;        // sum over env-steps and robots of |setpoint - position|
   double final_distance_sum_m = 0;        // sum over finished episodes of the mean robot distance to target
   std::uint32_t placement_fallbacks = 0;  // robot placements with no clear (start, target) pair
+  std::uint32_t reset_errors = 0;         // non-ok statuses of the core's resets (planar; the World counts its own)
 };
 
 struct WorldSummary {
@@ -42,6 +43,7 @@ inline void add_env_counters(WorldSummary& s, const EnvStats& e) {
   s.episodes_done += e.episodes_done;
   s.successes += e.successes;
   s.placement_fallbacks += e.placement_fallbacks;
+  s.reset_errors += e.reset_errors;
 }
 
 }  // namespace kestrel::sim
