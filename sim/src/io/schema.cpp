@@ -125,6 +125,7 @@ const char* enum_name(const std::pair<const char*, E> (&names)[N], E e) {
 const char* const kShapes[] = {"sphere", "box", "capsule", "cylinder"};
 const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall", "wall", "thin", "sphere", "mesh"};
 const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
+const char* const kNavigationActionSpaces[] = {"forward_inclination", "velocity"};
 
 }  // namespace
 
@@ -349,7 +350,14 @@ const Schema<TaskConfig>& task_schema() {
 const Schema<NavigationConfig>& navigation_schema() {
   using S = NavigationConfig;
   static const Field<S> f[] = {
-      real_f<S>("max_speed_m_s", &S::max_speed_m_s, "m/s", 1e-3, 100, "actions [-1, 1] x this: the vx, vy, vz commands"),
+      choice_f<S>(
+          "action_space", "forward_inclination, velocity",
+          [](S& s, const std::string& v) { return set_enum(kNavigationActionSpaces, v, s.action_space); },
+          [](const S& s) { return enum_name(kNavigationActionSpaces, s.action_space); },
+          "forward_inclination: 3 actions (forward speed, climb angle, yaw rate; Aerial Gym's); velocity: 4 (vx, vy, vz, yaw rate)"),
+      real_f<S>("max_speed_m_s", &S::max_speed_m_s, "m/s", 1e-3, 100,
+                "forward_inclination: the top speed; velocity: actions [-1, 1] x this are the vx, vy, vz commands"),
+      real_f<S>("max_inclination_rad", &S::max_inclination_rad, "rad", 0, 1.5707963, "forward_inclination: action 1 x this is the climb angle"),
       real_f<S>("max_yaw_rate_rad_s", &S::max_yaw_rate_rad_s, "rad/s", 0, 100, "actions [-1, 1] x this: the yaw-rate command"),
       int_f<S>("pool_rows", &S::pool_rows, 1, 64, nullptr, "range image min-pooled to pool_rows x pool_cols observation cells"),
       int_f<S>("pool_cols", &S::pool_cols, 1, 64, nullptr, ""),

@@ -15,9 +15,14 @@ constexpr int kStateObs = policy::kNavigationStateObsDim;  // policy/observation
 
 inline float norm3(const float v[3]) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
-/// [vx, vy, vz, yaw_rate] in [-1, 1] (clamped; NaN becomes 0) scaled by max_speed_m_s and
-/// max_yaw_rate_rad_s.
-void transform_action(const float in[kActionDim], const NavigationParams& p, float out[kActionDim]);
+/// The policy's navigation_action_dim(p) actions (each clamped to [-1, 1]; NaN becomes 0) to the
+/// velocity command [vx, vy, vz, yaw_rate] (vehicle frame) of p.action_space.
+void transform_action(const float* in, const NavigationParams& p, float out[kActionDim]);
+
+/// The inverse for the scripted policy: a wanted command in [-1, 1] units of the velocity space
+/// ([vx, vy, vz, yaw_rate] / maxima) to p.action_space's actions. forward_inclination cannot move
+/// sideways or backwards: vy becomes a turn towards that side, vx < 0 a stop.
+void command_to_action(const float cmd[kActionDim], const NavigationParams& p, float* action);
 
 /// The first kStateObs observations: unit goal direction and distance from the vehicle-frame
 /// error, roll, pitch, 0, body linear and angular velocity, the transformed actions.

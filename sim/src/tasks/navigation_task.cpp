@@ -58,14 +58,40 @@ int next_curriculum_level(const NavigationCurriculum& c, double success_rate, in
 
 int navigation_obs_dim(const NavigationParams& p) { return kNavStateObs + p.pool_rows * p.pool_cols; }
 
+int navigation_action_dim(const NavigationParams& p) { return p.action_space == NavigationActionSpace::velocity ? 4 : 3; }
+
 namespace nav {
 
-void transform_action(const float in[kActionDim], const NavigationParams& p, float out[kActionDim]) {
-  for (int k = 0; k < kActionDim; ++k) {
-    // clamp(-1, 1) then scale; a NaN action becomes 0 (never reaches the controller).
-    const float c = in[k] >= -1.0f && in[k] <= 1.0f ? in[k] : (in[k] > 1.0f ? 1.0f : (in[k] < -1.0f ? -1.0f : 0.0f));
-    out[k] = c * (k < 3 ? p.max_speed_m_s : p.max_yaw_rate_rad_s);
+namespace {
+// clamp(-1, 1); a NaN action becomes 0 (never reaches the controller).
+float clamp_unit(float x) { return x >= -1.0f && x <= 1.0f ? x : (x > 1.0f ? 1.0f : (x < -1.0f ? -1.0f : 0.0f)); }
+}  // namespace
+
+void transform_action(const float* in, const NavigationParams& p, float out[kActionDim]) {
+  if (p.action_space == NavigationActionSpace::velocity) {
+    for (int k = 0; k < kActionDim; ++k) out[k] = clamp_unit(in[k]) * (k < 3 ? p.max_speed_m_s : p.max_yaw_rate_rad_s);
+    return;
   }
+  // The reference's expression order in float32: (a0 + 1) x cos / sin(max_inclination x a1) x
+  // max_speed / 2; the climb angle tilts the forward speed, it never adds a sideways component.
+  const float fwd = clamp_unit(in[0]) + 1.0f, incl = p.max_inclination_rad * clamp_unit(in[1]);
+  out[0] = fwd * std::cos(incl) * p.max_speed_m_s / 2.0f;
+  out[1] = 0.0f;
+  out[2] = fwd * std::sin(incl) * p.max_speed_m_s / 2.0f;
+  out[3] = clamp_unit(in[2]) * p.max_yaw_rate_rad_s;
+}
+
+void command_to_action(const float cmd[kActionDim], const NavigationParams& p, float* action) {
+  if (p.action_space == NavigationActionSpace::velocity) {
+    for (int k = 0; k < kActionDim; ++k) action[k] = clamp_unit(cmd[k]);
+    return;
+  }
+  const float vx = std::max(cmd[0], 0.0f), vz = clamp_unit(cmd[2]);
+  const float speed = std::min(1.0f, std::sqrt(vx * vx + vz * vz));
+  const float climb = speed > 0.0f && p.max_inclination_rad > 0.0f ? std::atan2(vz, vx) / p.max_inclination_rad : 0.0f;
+  action[0] = 2.0f * speed - 1.0f;
+  action[1] = clamp_unit(climb);
+  action[2] = clamp_unit(cmd[3] + 2.0f * cmd[1]);  // a sideways wish (+y, left) turns that way (+yaw)
 }
 
 void write_state_obs(const float e_v[3], float roll, float pitch, const float v_b[3], const float w_b[3],
@@ -153,7 +179,7 @@ namespace {
 class NavigationTask final : public Task {
  public:
   NavigationTask(std::unique_ptr<Simulator> s, const NavigationParams& p)
-      : Task(std::move(s), navigation_obs_dim(p), kNavActionDim), p_(p) {
+      : Task(std::move(s), navigation_obs_dim(p), navigation_action_dim(p)), p_(p) {
     const std::size_t n = static_cast<std::size_t>(num_envs_);
     err_prev_.assign(n * 3, 0.0f);
     action_.assign(n * kNavActionDim, 0.0f);
@@ -186,7 +212,7 @@ class NavigationTask final : public Task {
       float* cur = &action_[i * kNavActionDim];
       float* prev = &action_prev_[i * kNavActionDim];
       for (int k = 0; k < kNavActionDim; ++k) prev[k] = cur[k];
-      nav::transform_action(actions + i * kNavActionDim, p_, cur);
+      nav::transform_action(actions + i * static_cast<std::size_t>(action_dim_), p_, cur);
       if (flat_) cur[2] = 0.0f;  // the altitude is held: no vertical command (nor its penalty)
       for (int k = 0; k < kNavActionDim && k < ad; ++k)
         sim_actions_[i * static_cast<std::size_t>(ad) + static_cast<std::size_t>(k)] = static_cast<real>(cur[k]);
@@ -225,10 +251,11 @@ class NavigationTask final : public Task {
   bool scripted_actions(float* actions) const override {
     for (int env = 0; env < num_envs_; ++env) {
       const float* o = &obs_[static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_)];
-      float* a = actions + static_cast<std::size_t>(env) * kNavActionDim;
-      if (scan_) nav::scripted_action(o, o + kNavStateObs + view_begin_, 1, view_end_ - view_begin_, false, a);
-      else nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, !flat_, a);
-      if (flat_) a[2] = 0.0f;
+      float cmd[kNavActionDim];
+      if (scan_) nav::scripted_action(o, o + kNavStateObs + view_begin_, 1, view_end_ - view_begin_, false, cmd);
+      else nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, !flat_, cmd);
+      if (flat_) cmd[2] = 0.0f;
+      nav::command_to_action(cmd, p_, actions + static_cast<std::size_t>(env) * static_cast<std::size_t>(action_dim_));
     }
     return true;
   }
@@ -286,8 +313,9 @@ std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const Navi
             ", increase_step " + std::to_string(c.increase_step) + ", decrease_step " + std::to_string(c.decrease_step);
     return nullptr;
   }
-  if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || params.pool_rows < 1 || params.pool_cols < 1) {
-    error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, pool_rows and pool_cols >= 1";
+  if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || !(params.max_inclination_rad >= 0) ||
+      params.pool_rows < 1 || params.pool_cols < 1) {
+    error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, max_inclination_rad >= 0, pool_rows and pool_cols >= 1";
     return nullptr;
   }
   WorldConfig wc = config;

@@ -225,7 +225,9 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
   if (id == "navigation_task") {
     NavigationParams p;
     const NavigationConfig& nc = config.task.navigation;
+    p.action_space = nc.action_space;
     p.max_speed_m_s = static_cast<float>(nc.max_speed_m_s);
+    p.max_inclination_rad = static_cast<float>(nc.max_inclination_rad);
     p.max_yaw_rate_rad_s = static_cast<float>(nc.max_yaw_rate_rad_s);
     p.pool_rows = nc.pool_rows;
     p.pool_cols = nc.pool_cols;

@@ -97,7 +97,7 @@ TEST(NavigationTask, ShapesAndFirstObservation) {
   ASSERT_TRUE(t);
   EXPECT_STREQ(t->name(), "navigation_task");
   EXPECT_EQ(t->obs_dim(), 17 + 64);
-  EXPECT_EQ(t->action_dim(), 4);
+  EXPECT_EQ(t->action_dim(), 3);  // forward_inclination, the reference's action space
   for (int e = 0; e < 4; ++e) {
     const float* o = t->observations() + e * t->obs_dim();
     const RigidBodyState& st = world_of(*t).robot_state(e, 0);
@@ -203,9 +203,39 @@ TEST(NavigationTask, TruncationAtEpisodeLength) {
   EXPECT_EQ(t->infos().successes, 0u);
 }
 
-TEST(NavigationTask, ActionsAreScaledVelocityCommands) {
+// The reference's action_transformation_function: speed (a0 + 1) / 2 x max along the heading,
+// tilted by a1 x pi/4, yaw rate a2 x pi/3; never sideways. A NaN action is 0 (half speed level).
+TEST(NavigationTask, ForwardInclinationActions) {
   auto t = build(nav_config(1, 10));
   ASSERT_TRUE(t);
+  ASSERT_EQ(t->action_dim(), 3);
+  const float a[3] = {1.0f, 0.5f, -2.0f};  // yaw clamped to -1
+  t->step(a);
+  const real* w = world_of(*t).action(0, 0);
+  const float climb = 0.78539816f * 0.5f;
+  EXPECT_FLOAT_EQ(static_cast<float>(w[0]), 2.0f * std::cos(climb) * 2.0f / 2.0f);
+  EXPECT_EQ(w[1], 0_r);
+  EXPECT_FLOAT_EQ(static_cast<float>(w[2]), 2.0f * std::sin(climb) * 2.0f / 2.0f);
+  EXPECT_FLOAT_EQ(static_cast<float>(w[3]), -1.0471976f);
+  EXPECT_NEAR(static_cast<float>(w[0] * w[0] + w[2] * w[2]), 4.0f, 1e-5f);  // the top speed, 2 m/s
+  EXPECT_FLOAT_EQ(t->observations()[13], static_cast<float>(w[0]));  // the command in the observation
+  const float stop[3] = {-1.0f, 1.0f, 0.0f};
+  t->step(stop);
+  EXPECT_EQ(world_of(*t).action(0, 0)[0], 0_r);
+  EXPECT_EQ(world_of(*t).action(0, 0)[2], 0_r);
+  const float bad[3] = {std::nanf(""), std::nanf(""), std::nanf("")};
+  t->step(bad);
+  EXPECT_FLOAT_EQ(static_cast<float>(world_of(*t).action(0, 0)[0]), 1.0f);
+  EXPECT_EQ(world_of(*t).action(0, 0)[2], 0_r);
+  EXPECT_EQ(world_of(*t).action(0, 0)[3], 0_r);
+}
+
+TEST(NavigationTask, ActionsAreScaledVelocityCommands) {
+  NavigationParams p;
+  p.action_space = NavigationActionSpace::velocity;
+  auto t = build(nav_config(1, 10), p);
+  ASSERT_TRUE(t);
+  ASSERT_EQ(t->action_dim(), 4);
   const float a[4] = {3.0f, -0.25f, 0.5f, 0.5f};  // x clamped to 1
   t->step(a);
   const real* w = world_of(*t).action(0, 0);
@@ -376,7 +406,7 @@ TEST(NavigationTask, CurriculumFromTheScenario) {
 TEST(NavigationTask, NavigationSectionFromTheScenario) {
   std::string err;
   WorldConfig s;
-  ASSERT_TRUE(load_scenario_string("task: {name: navigation_task, navigation: {max_speed_m_s: 1.5, max_yaw_rate_rad_s: 0.5,\n"
+  ASSERT_TRUE(load_scenario_string("task: {name: navigation_task, navigation: {action_space: velocity, max_speed_m_s: 1.5, max_yaw_rate_rad_s: 0.5,\n"
                                    "       pool_rows: 4, pool_cols: 2, reward: {collision_penalty: -50}}}\n"
                                    "env: {name: env_with_obstacles, num_envs: 2}\n",
                                    "nav.yaml", s, err))
@@ -384,6 +414,7 @@ TEST(NavigationTask, NavigationSectionFromTheScenario) {
   auto t = make_task(s, err);
   ASSERT_TRUE(t) << err;
   EXPECT_EQ(t->obs_dim(), 17 + 8);
+  EXPECT_EQ(t->action_dim(), 4);
   const float a[8] = {1, 0, 0, 1, 0, 0, 0, 0};
   t->step(a);
   EXPECT_FLOAT_EQ(t->observations()[13], 1.5f);  // the scaled actions in the observation

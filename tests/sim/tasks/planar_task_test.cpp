@@ -62,7 +62,7 @@ TEST(PlanarNavigationTask, ShapesAndFirstObservation) {
   EXPECT_STREQ(t->backend_name(), "planar");
   EXPECT_EQ(rigid_world(t->simulator()), nullptr);
   EXPECT_EQ(t->obs_dim(), 81);  // 17 + 8 x 8, as on rigid
-  EXPECT_EQ(t->action_dim(), 4);
+  EXPECT_EQ(t->action_dim(), 3);  // forward_inclination
   const Simulator& s = t->simulator();
   ASSERT_EQ(s.lidar_beams(), 128);
   const real range = s.config().simulator.lidar_max_range_m;
@@ -92,11 +92,11 @@ TEST(PlanarNavigationTask, ShapesAndFirstObservation) {
 TEST(PlanarNavigationTask, VerticalActionDroppedOthersScaled) {
   auto t = build(planar_nav(1, 2));
   ASSERT_TRUE(t);
-  const float a[4] = {3.0f, -0.25f, 1.0f, 0.5f};  // x clamped to 1; z dropped
+  const float a[3] = {3.0f, 0.5f, 0.5f};  // speed clamped to the top; the climb's vertical part dropped
   t->step(a);
   const float* o = t->observations();
-  EXPECT_FLOAT_EQ(o[13], 2.0f);
-  EXPECT_FLOAT_EQ(o[14], -0.5f);
+  EXPECT_FLOAT_EQ(o[13], 2.0f * std::cos(0.78539816f * 0.5f) * 2.0f / 2.0f);
+  EXPECT_FLOAT_EQ(o[14], 0.0f);
   EXPECT_FLOAT_EQ(o[15], 0.0f);
   EXPECT_FLOAT_EQ(o[16], 0.5f * 1.0471976f);
   const Simulator& s = t->simulator();

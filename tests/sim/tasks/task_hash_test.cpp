@@ -93,8 +93,8 @@ TEST(TaskHashes, FrozenOnEveryBackend) {
       {"position_setpoint_task", "lee_velocity_control", Backend::rigid, 5851806151262365905ull},
       {"position_setpoint_task", "lee_position_control", Backend::planar, 509582057045177053ull},
       {"position_setpoint_task", "lee_velocity_control", Backend::planar, 2476532400280623762ull},
-      {"navigation_task", "", Backend::rigid, 11620873553330774011ull},
-      {"navigation_task", "", Backend::planar, 16337784716381217438ull},  // re-frozen: one layout generator (see git log)
+      {"navigation_task", "", Backend::rigid, 17410311882898114851ull},  // re-frozen: Aerial Gym's forward_inclination action space
+      {"navigation_task", "", Backend::planar, 4934446477286308373ull},  // re-frozen: forward_inclination actions (see git log)
       {"goal_box_through_gap", "", Backend::rigid, 5311961127904642832ull},
       {"goal_box_through_gap", "", Backend::planar, 11363323505176394179ull},
   };

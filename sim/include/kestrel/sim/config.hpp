@@ -211,8 +211,16 @@ struct NavigationRewardParams {
 };
 
 /// navigation_task's action scaling, image pooling and reward (task.navigation).
+/// How navigation_task's actions become the velocity controller's [vx, vy, vz, yaw_rate] command.
+/// forward_inclination (Aerial Gym's navigation_task_config.action_transformation_function): 3
+/// actions in [-1, 1]: speed (a0 + 1) / 2 x max_speed_m_s along the body's heading, tilted up or
+/// down by a1 x max_inclination_rad, and a2 x max_yaw_rate_rad_s; never sideways or backwards, so
+/// the vehicle moves where its forward sensor looks. velocity: 4 actions, each x its maximum.
+enum class NavigationActionSpace : std::uint8_t { forward_inclination = 0, velocity };
 struct NavigationConfig {
-  real max_speed_m_s = 2.0f;              // actions [-1, 1] -> velocity commands
+  NavigationActionSpace action_space = NavigationActionSpace::forward_inclination;
+  real max_speed_m_s = 2.0f;              // forward_inclination: the top speed; velocity: per axis
+  real max_inclination_rad = 0.78539816f; // pi / 4 (forward_inclination)
   real max_yaw_rate_rad_s = 1.0471976f;   // pi / 3
   int pool_rows = 8, pool_cols = 8;       // the range image min-pooled to rows x cols cells
   NavigationRewardParams reward;

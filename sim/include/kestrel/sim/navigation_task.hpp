@@ -26,10 +26,11 @@
 //     (level - min_level) / (max_level - min_level) and takes effect at each environment's next
 //     layout.
 // Differences (why):
-//   - actions are [vx, vy, vz, yaw_rate] for lee_velocity_control, clamped to [-1, 1] and scaled
-//     by max_speed_m_s and max_yaw_rate_rad_s (the reference's commented-out
-//     action_transformation_function; its active one is for the lmf2's 3-input velocity
-//     controller, not available here);
+//   - actions (task.navigation.action_space): forward_inclination, the default, is the reference's
+//     active action_transformation_function (3 actions in [-1, 1]: speed (a0 + 1) / 2 x
+//     max_speed_m_s along the heading, climb angle a1 x max_inclination_rad, yaw rate a2 x
+//     max_yaw_rate_rad_s; vy = 0), sent to lee_velocity_control as [vx, 0, vz, yaw_rate] in the
+//     vehicle frame; velocity is its commented-out one ([vx, vy, vz, yaw_rate] each x its maximum);
 //   - the goal is placed clear of obstacles (World placement, TaskConfig::clearance_m; no line of
 //     sight needed): the reference's uniform draw may put it inside an obstacle;
 //   - no observation noise (the reference adds uniform noise to the goal vector and the angles
@@ -55,7 +56,9 @@ namespace kestrel::sim {
 using NavigationCurriculum = CurriculumConfig;
 
 struct NavigationParams {
+  NavigationActionSpace action_space = NavigationActionSpace::forward_inclination;
   float max_speed_m_s = 2.0f;
+  float max_inclination_rad = 0.78539816f;  // pi / 4
   float max_yaw_rate_rad_s = 1.0471976f;  // pi / 3
   int pool_rows = 8, pool_cols = 8;
   NavigationRewardParams reward;
@@ -74,9 +77,13 @@ int next_curriculum_level(const NavigationCurriculum& c, double success_rate, in
 /// Observation size: 17 + pool_rows * pool_cols.
 int navigation_obs_dim(const NavigationParams& p);
 
+/// Actions per environment: 3 (forward_inclination) or 4 (velocity).
+int navigation_action_dim(const NavigationParams& p);
+
 /// Its scripted_actions() (not a reference feature; for `kestrel run --policy scripted`): velocity
 /// towards the goal at full speed, yaw towards it, and a reactive dodge to the clearest side of
-/// the pooled image when its central half sees something within 0.65 of the sensor's range.
+/// the pooled image when its central half sees something within 0.65 of the sensor's range (with
+/// forward_inclination, a sideways dodge is a turn).
 /// Builds the task on `backend`: needs robots_per_env = 1, controller lee_velocity_control and a
 /// range image: on rigid a ray sensor (lidar, ToF or camera) on the robot; on planar the
 /// fixed-altitude multirotor's 2-D lidar (simulator.lidar_beams, 128 if 0) pooled into pool_rows *
