@@ -97,12 +97,13 @@ class PositionSetpointTask final : public Task {
       const std::size_t i = static_cast<std::size_t>(env);
       ++episode_step_[i];
       std::uint8_t crash = crash_or_out(env) ? 1 : 0;
-      float q[4], e_w[3], e_v[3], w[3];
+      float q[4], e_w[3], w[3];
       quat_xyzw(env, q);
       error_world(env, e_w);
       for (int k = 0; k < 3; ++k) w[k] = static_cast<float>(sim_->base_ang_vel_b()[3 * i + k]);
-      vehicle_frame_error(q, e_w, e_v);
-      const float r = position_setpoint_reward(e_v, q, w, 1.0f, crash);  // multiplier 1.0 as the task passes
+      // Only |error| enters the reward: the world-frame error, not the reference's vehicle-frame
+      // copy of it (same length; task.hpp).
+      const float r = position_setpoint_reward(e_w, q, w, 1.0f, crash);  // multiplier 1.0 as the task passes
       rewards_[i] = r;
       terminations_[i] = crash;
       const std::uint8_t trunc = episode_step_[i] >= len_ ? 1 : 0;

@@ -131,6 +131,11 @@ TEST(RewardParity, AllFortyGoldenCases) {
     const float r2 = position_setpoint_reward(e_v, c.quat, c.angvel, c.multiplier, crash2);
     EXPECT_TRUE(close(r2, c.reward, 1e-5f, 1e-5f)) << "case " << c.id << " (from world inputs)";
     EXPECT_EQ(crash2, crash);
+    // What the task passes: the world-frame error (only its length enters the reward).
+    std::uint8_t crash3 = c.crashes_in > 0 ? 1 : 0;
+    const float r3 = position_setpoint_reward(e_w, c.quat, c.angvel, c.multiplier, crash3);
+    EXPECT_TRUE(close(r3, c.reward, 1e-5f, 1e-5f)) << "case " << c.id << " (world-frame error)";
+    EXPECT_EQ(crash3, crash);
     ++checked;
   }
   EXPECT_EQ(checked, 40);
