@@ -6,6 +6,11 @@
 #
 #   bench/sim/side_by_side.sh BASE_COMMIT [PAIRS] [OUT_DIR]
 #
+# Environment: ONLY=SUBSTRING passes --only to the task bench; BASE_BIN=DIR NOW_BIN=DIR run
+# prebuilt binaries (DIR/kestrel_bench_sim, DIR/kestrel_bench_task; DIR/lib on LD_LIBRARY_PATH)
+# instead of building, e.g. on the device machine, which has no compiler packages; PIN=CPUS the
+# cores to pin to (default 0,1).
+#
 # Builds BASE in a git worktree under build/side_by_side/ (bench targets only; a base without
 # bench_task.cpp gets today's copy), then writes OUT_DIR/harness.csv and OUT_DIR/task.csv with one
 # row per (side, pair, case) and OUT_DIR/summary.csv with medians and best-of ratios
@@ -17,24 +22,36 @@ pairs=${2:-10}
 out=${3:-build/side_by_side/out}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
-wt=build/side_by_side/base
-mkdir -p build/side_by_side "$out"
-[ -d "$wt" ] || git worktree add --detach "$wt" "$base"
-[ -f "$wt/bench/sim/bench_task.cpp" ] || { cp bench/sim/bench_task.cpp "$wt/bench/sim/"; printf '%s\n' \
-  'add_executable(kestrel_bench_task bench_task.cpp)' 'target_link_libraries(kestrel_bench_task PRIVATE kestrel_sim kestrel_flags)' \
-  >> "$wt/bench/sim/CMakeLists.txt"; }
-(cd "$wt" && cmake --preset host >/dev/null && cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task)
-cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task
-pin="taskset -c 0,1"
+mkdir -p "$out"
+if [ -n "${BASE_BIN:-}" ] && [ -n "${NOW_BIN:-}" ]; then
+  base_dir=$BASE_BIN
+  now_dir=$NOW_BIN
+  export LD_LIBRARY_PATH="$BASE_BIN/lib:$NOW_BIN/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+else
+  wt=build/side_by_side/base
+  mkdir -p build/side_by_side
+  [ -d "$wt" ] || git worktree add --detach "$wt" "$base"
+  [ -f "$wt/bench/sim/bench_task.cpp" ] || { cp bench/sim/bench_task.cpp "$wt/bench/sim/"; printf '%s\n' \
+    'add_executable(kestrel_bench_task bench_task.cpp)' 'target_link_libraries(kestrel_bench_task PRIVATE kestrel_sim kestrel_flags)' \
+    >> "$wt/bench/sim/CMakeLists.txt"; }
+  (cd "$wt" && cmake --preset host >/dev/null && cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task)
+  cmake --build --preset host --target kestrel_bench_sim kestrel_bench_task
+  base_dir=$wt/build/host/bench/sim
+  now_dir=build/host/bench/sim
+fi
+only=""
+[ -n "${ONLY:-}" ] && only="--only $ONLY"
+pin="taskset -c ${PIN:-0,1}"
 command -v taskset >/dev/null || pin=""
 echo "side,pair,case,envs,threads,env_steps_per_s,ns_per_env_step,note" > "$out/harness.csv"
 echo "side,pair,task,controller,backend,envs,threads,ns_per_env_step" > "$out/task.csv"
 for i in $(seq 1 "$pairs"); do
   for side in base now; do
-    dir=$([ "$side" = base ] && echo "$wt/build/host" || echo build/host)
-    $pin "$dir/bench/sim/kestrel_bench_sim" --quick --reps 7 --csv "$out/r.csv" >/dev/null
+    dir=$([ "$side" = base ] && echo "$base_dir" || echo "$now_dir")
+    $pin "$dir/kestrel_bench_sim" --quick --reps 7 --csv "$out/r.csv" >/dev/null
     tail -n +2 "$out/r.csv" | sed "s/^/$side,$i,/" >> "$out/harness.csv"
-    $pin "$dir/bench/sim/kestrel_bench_task" --reps 2 | grep -E '^[a-z_]+,' | grep -v '^task,' | sed "s/^/$side,$i,/" >> "$out/task.csv"
+    # shellcheck disable=SC2086
+    $pin "$dir/kestrel_bench_task" --reps 2 $only | grep -E '^[a-z_]+,' | grep -v '^task,' | sed "s/^/$side,$i,/" >> "$out/task.csv"
   done
 done
 python3 bench/sim/side_by_side_summary.py "$out"
