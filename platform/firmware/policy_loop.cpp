@@ -83,8 +83,8 @@ Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock
         const std::uint64_t t0 = clock();
         float obs_f[policy::kPositionSetpointObsDim];
         policy::position_setpoint_observation_vehicle_frame(p.state, target_w, obs_f);
-        real obs[policy::kPositionSetpointObsDim];
-        for (int i = 0; i < policy::kPositionSetpointObsDim; ++i) obs[i] = static_cast<real>(obs_f[i]);
+        real obs_buf[policy::kPositionSetpointObsDim];
+        const real* obs = policy::observation_as_real(obs_f, obs_buf, policy::kPositionSetpointObsDim);
         real a[4];
         if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok) {
           for (int i = 0; i < 4; ++i) action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);

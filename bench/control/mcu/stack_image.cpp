@@ -177,17 +177,13 @@ real g_action[4];                     // the last accepted action, held on a rej
 
 // One inference as the firmware runs it every control period (policy_loop.cpp, pass 0), the root
 // of memory_breakdown.py's per-step code.
-__attribute__((noinline)) void policy_step(const real (&in)[13], const real (&target)[3]) {
+// It takes the vehicle state as the firmware holds it (policy_loop.cpp's RigidBodyState).
+__attribute__((noinline)) void policy_step(const kestrel::RigidBodyState& b, const real (&target)[3]) {
   using namespace kestrel;
-  RigidBodyState b;
-  b.position_w = Vec3(in[0], in[1], in[2]);
-  b.linvel_w = Vec3(in[3], in[4], in[5]);
-  b.orientation_wb = Quat(in[9], in[6], in[7], in[8]);
-  b.angvel_b = Vec3(in[10], in[11], in[12]);
   float obs_f[policy::kPositionSetpointObsDim];
   policy::position_setpoint_observation_vehicle_frame(b, Vec3(target[0], target[1], target[2]), obs_f);
-  real obs[policy::kPositionSetpointObsDim];
-  for (int i = 0; i < policy::kPositionSetpointObsDim; ++i) obs[i] = static_cast<real>(obs_f[i]);
+  real obs_buf[policy::kPositionSetpointObsDim];
+  const real* obs = policy::observation_as_real(obs_f, obs_buf, policy::kPositionSetpointObsDim);
   real a[4];
   if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok)
     for (int i = 0; i < 4; ++i) g_action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
@@ -202,8 +198,13 @@ int main() {
   for (std::uint32_t k = 0; k < g_steps; ++k) {
     real in[13];
     for (int i = 0; i < 13; ++i) in[i] = g_in[i];
-    const real target[3] = {g_in[0], g_in[1], 1};
-    policy_step(in, target);
+    kestrel::RigidBodyState b;
+    b.position_w = kestrel::Vec3(in[0], in[1], in[2]);
+    b.linvel_w = kestrel::Vec3(in[3], in[4], in[5]);
+    b.orientation_wb = kestrel::Quat(in[9], in[6], in[7], in[8]);
+    b.angvel_b = kestrel::Vec3(in[10], in[11], in[12]);
+    const real target[3] = {in[0], in[1], 1};
+    policy_step(b, target);
   }
   return 0;
 }

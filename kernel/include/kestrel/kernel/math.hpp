@@ -157,8 +157,18 @@ inline void sin_cos(real x, real& s, real& c) {
 /// below 0.625 and 1 - 2 / (e^2x + 1) above): about 1 ulp of float. Double builds (host only) use
 /// the library.
 namespace detail {
+/// 2^e as a float, for e in [-126, 127] (exact: the exponent field alone).
+__attribute__((always_inline)) inline float exp2i_f32(int e) {
+  const std::uint32_t u = static_cast<std::uint32_t>(e + 127) << 23;
+  float f;
+  std::memcpy(&f, &u, sizeof f);
+  return f;
+}
 /// exp_f32's main path, for x in [-103.97..., 88.72...] (no NaN): callers that know their range
 /// (tanh_f32's large branch, the ELU's negative side) skip the checks, with the same bits.
+/// kNormalOnly: x in [-87.3, 88.7], where the result is a normal float and the scaling by 2^n
+/// needs one step: the same bits without the two range branches (the ELU's side above -17.5).
+template <bool kNormalOnly = false>
 __attribute__((always_inline)) inline float exp_f32_reduced(float x) {
   constexpr float kLog2e = 1.44269504088896341f;
   const float zf = kLog2e * x + 0.5f;
@@ -177,15 +187,11 @@ __attribute__((always_inline)) inline float exp_f32_reduced(float x) {
              1.6666665459e-1f) * r + 5.0000001201e-1f;
   y = y * z + r + 1.0f;
   // y * 2^n in two exact power-of-two steps (n may reach -150 on the way to a subnormal).
-  auto pow2 = [](int e) {
-    const std::uint32_t u = static_cast<std::uint32_t>(e + 127) << 23;
-    float f;
-    std::memcpy(&f, &u, sizeof f);
-    return f;
-  };
-  if (n > 127) return y * pow2(127) * pow2(n - 127);
-  if (n < -126) return y * pow2(-126) * pow2(n + 126 < -126 ? -126 : n + 126);
-  return y * pow2(n);
+  if (!kNormalOnly) {
+    if (n > 127) return y * exp2i_f32(127) * exp2i_f32(n - 127);
+    if (n < -126) return y * exp2i_f32(-126) * exp2i_f32(n + 126 < -126 ? -126 : n + 126);
+  }
+  return y * exp2i_f32(n);
 }
 inline float exp_f32(float x) {
   if (!(x == x)) return x;                    // NaN

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <type_traits>
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
@@ -37,6 +38,19 @@ inline void position_setpoint_observation(const RigidBodyState& st, const Vec3& 
 /// [c s; -s c] e with (c, s) the yaw's cosine and sine taken from the observation's own quaternion
 /// as the normalised (w^2 + x^2 - y^2 - z^2, 2 (w z + x y)) (no atan2: identical bits on every
 /// target). A yaw-less attitude (both terms 0: pointing straight up or down) leaves e as it is.
+/// An observation built in float as the network's real type: `f` itself where real is float (no
+/// copy: the M4F image is ~50 B smaller), else copied into `buf` (n values).
+inline const real* observation_as_real(const float* f, real* buf, int n) {
+  if constexpr (std::is_same<real, float>::value) {
+    (void)buf;
+    (void)n;
+    return f;
+  } else {
+    for (int i = 0; i < n; ++i) buf[i] = static_cast<real>(f[i]);
+    return buf;
+  }
+}
+
 inline void position_setpoint_observation_vehicle_frame(const RigidBodyState& st, const Vec3& target_w, float* obs) {
   position_setpoint_observation(st, target_w, obs);
   const float x = obs[3], y = obs[4], z = obs[5], w = obs[6];
