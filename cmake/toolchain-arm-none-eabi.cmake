@@ -39,7 +39,7 @@ find_program(KESTREL_ARM_SIZE NAMES arm-none-eabi-size HINTS "${ARM_TOOLCHAIN_DI
 
 # -ffunction-sections/-fdata-sections + --gc-sections: one section per function/object so the
 # linker drops everything an image does not reach. -ffp-contract=off: no fused multiply-add unless
-# written (determinism contract, ../shared/DESIGN.md). --specs=nano.specs: newlib-nano headers and
+# written (determinism contract, docs/design.md). --specs=nano.specs: newlib-nano headers and
 # libraries (smaller; the images use no stdio anyway).
 set(_kestrel_common "${KESTREL_MCU_ARCH_FLAGS} -ffunction-sections -fdata-sections -ffp-contract=off --specs=nano.specs")
 set(CMAKE_C_FLAGS_INIT "${_kestrel_common}")

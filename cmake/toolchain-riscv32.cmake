@@ -14,7 +14,7 @@ set(CMAKE_C_COMPILER riscv64-unknown-elf-gcc)
 set(CMAKE_CXX_COMPILER riscv64-unknown-elf-g++)
 set(CMAKE_ASM_COMPILER riscv64-unknown-elf-gcc)
 # picolibc (not the toolchain's newlib): its specs select the rv32imac/ilp32 multilib.
-# -ffp-contract=off: the determinism contract (../shared/DESIGN.md); rv32imac has no FPU anyway.
+# -ffp-contract=off: the determinism contract (docs/design.md); rv32imac has no FPU anyway.
 set(_kestrel_rv "-march=rv32imac -mabi=ilp32 -mcmodel=medany --specs=picolibc.specs -ffunction-sections -fdata-sections -ffp-contract=off")
 set(CMAKE_C_FLAGS_INIT "${_kestrel_rv}")
 set(CMAKE_CXX_FLAGS_INIT "${_kestrel_rv}")

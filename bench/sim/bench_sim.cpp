@@ -1,7 +1,7 @@
 // Whole-system bench of the batched world: the full physics step (controller -> allocation ->
 // motor model -> rigid-body integration -> ground/obstacle collision, plus the task's reset and
 // statistics) over N environments, against
-//  - the torch CPU baseline of Aerial Gym's own control step (../shared/golden/torch_baseline.md),
+//  - the torch CPU baseline of Aerial Gym's own control step (tests/golden/reference/torch_baseline.md),
 //    reproduced here as constants, and
 //  - the same quadrotor stepped in MuJoCo (free body, the same Kestrel controller + allocation +
 //    motor model computing the wrench each step, applied through xfrc_applied), one core.
@@ -43,7 +43,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// ../shared/golden/torch_baseline.md, "controller + allocation + motor model (no_grad)": Aerial
+// tests/golden/reference/torch_baseline.md, "controller + allocation + motor model (no_grad)": Aerial
 // Gym's own control step with PyTorch on this 2-vCPU machine. The issue quotes ~1.1 M env-steps/s
 // at 4096 environments (the table: 0.97 M with 1 thread, 1.21 M with 2) and 840 env-steps/s at one
 // environment (1 thread). The full robot step of that file is slower still (0.72 M / 621).
@@ -498,7 +498,7 @@ int main(int argc, char** argv) {
 
   bench_split(o);
 
-  std::printf("\nvs torch baseline (../shared/golden/torch_baseline.md; Aerial Gym's controller+allocation+motor model,\n"
+  std::printf("\nvs torch baseline (tests/golden/reference/torch_baseline.md; Aerial Gym's controller+allocation+motor model,\n"
               "PyTorch CPU, this machine; Kestrel's figure also includes dynamics, collision and the task):\n");
   std::printf("  %d envs, 2 threads: Kestrel %.4g vs torch %.3g env-steps/s -> %.1fx   (target: Kestrel >= %.3g: %s)\n", big,
               r2[i_big], kTorch4096EnvStepsPerS, r2[i_big] / kTorch4096EnvStepsPerS, kTargetEmpty4096x2,

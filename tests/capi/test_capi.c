@@ -143,7 +143,7 @@ static int outputs_sane(const kestrel_output* o) {
   return ok;
 }
 
-/* Fuzz findings F1, F6, F7 (../../../shared/notes/fuzz.md), motor model off and on. */
+/* Fuzz findings F1, F6, F7 (docs/notes/fuzz.md), motor model off and on. */
 static void test_fuzz_findings(void) {
   int motors;
   for (motors = 0; motors <= 1; ++motors) {

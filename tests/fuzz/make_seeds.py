@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Regenerates the committed seed corpora (tests/fuzz/corpus/<target>/) from the repository's own
-scenarios and data files and the reproducers of the first campaign (../shared/notes/fuzz.md,
+scenarios and data files and the reproducers of the first campaign (docs/notes/fuzz.md,
 F1-F8; the data files are tests/sim/data/fuzz_*). Run from anywhere; overwrites the corpora.
 Harness input formats: see the comment at the top of each fuzz_*.cpp."""
 import glob, os, shutil, struct

@@ -14,7 +14,7 @@ long file_read(int handle, void* buf, std::size_t n);
 void file_close(int handle);
 
 /// Directory holding the golden reference JSON files: KESTREL_GOLDEN_DIR if set, else the
-/// build's default (../shared/golden beside the checkout, or the copy vendored in the repo).
+/// build's default (tests/golden/reference, the copy in the repository).
 const char* golden_dir();
 
 /// Joins golden_dir() and name into a static buffer.

@@ -2,7 +2,7 @@
 // applied, its pseudo-inverse, per-motor limits), the allocator's small mutable state, the result
 // type, and the plain pseudo-inverse allocator of the reference.
 //
-// Shape (../shared/DESIGN.md): AllocationModel is built once per geometry or motor-health change
+// Shape (docs/design.md): AllocationModel is built once per geometry or motor-health change
 // (build_allocation_model runs the Jacobi pseudo-inverse) and is read-only in the hot path;
 // AllocatorState holds what an allocator remembers between steps (last output for the
 // non-finite-input hold, the CLS active set for warm starts); AllocationResult is the output.

@@ -6,7 +6,7 @@
 // (eq. 16 without the feed-forward acceleration terms, exactly as Aerial Gym drops them).
 //
 // Every controller here reproduces Aerial Gym (ntnu-arl/aerial_gym_simulator, commit f0d0f05)
-// within the float32 tolerances of ../shared/golden/controllers.json, quirks included, except
+// within the float32 tolerances of tests/golden/reference/controllers.json, quirks included, except
 // where a comment says otherwise (lee_rates, whose reference crashes; in-place edits of the
 // caller's action, which we never do).
 //

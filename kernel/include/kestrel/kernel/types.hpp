@@ -1,6 +1,6 @@
 // Scalar and fixed-size math types of the Kestrel core.
 //
-// Conventions, written once here and followed everywhere (../shared/DESIGN.md):
+// Conventions, written once here and followed everywhere (docs/design.md):
 //  - SI units; a non-SI quantity carries its unit in its name (yaw_rate_deg_s).
 //  - World frame z up; default gravity (0, 0, -9.81) m/s^2.
 //  - Body frame x forward, y left, z up (thrust along body +z).

@@ -10,7 +10,7 @@
  * KESTREL_STORAGE_BYTES aligned for any scalar. The C++ side checks with static_assert that the
  * stack fits. There is no heap, no global state: two storages are two independent vehicles.
  *
- * Units and frames (as in the C++ core, ../../../../shared/DESIGN.md): SI, world frame z up,
+ * Units and frames (as in the C++ core, docs/design.md in the repository): SI, world frame z up,
  * body frame x forward / y left / z up, quaternions xyzw (scalar last) rotating body vectors into
  * the world, wrench [fx fy fz tx ty tz] in the body frame.
  *

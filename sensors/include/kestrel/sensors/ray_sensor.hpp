@@ -1,7 +1,7 @@
 // Ray-pattern sensors: lidar (and the multizone ToF, which is a small lidar grid), pinhole depth
 // camera, their Aerial Gym-compatible post-processing, noise and mounting.
 //
-// Ray tables follow ../shared/golden/sensor_rays.json exactly:
+// Ray tables follow tests/golden/reference/sensor_rays.json exactly:
 //  - lidar row i, column j: azimuth = hmax - (hmax - hmin) j / (W - 1), elevation =
 //    vmax - (vmax - vmin) i / (H - 1), dir = (cos az cos el, sin az cos el, sin el) in float64,
 //    stored in `real` and normalised again (row 0 = top, column 0 = most positive azimuth).
