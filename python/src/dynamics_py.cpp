@@ -52,8 +52,10 @@ nb::ndarray<nb::numpy, real, nb::ndim<1>> vector_out(const real* v, std::size_t 
 
 void bind_dynamics(nb::module_& m) {
   nb::class_<PyMultibody>(m, "Multibody",
-                          "A kinematic tree on a fixed base (dynamics/multibody.hpp): body i hangs from parent[i] "
-                          "(-1: the base) by joint[i] (0 revolute, 1 prismatic, 2 fixed) along axis[i] (joint frame); "
+                          "A kinematic tree on a fixed or floating base (dynamics/multibody.hpp): body i hangs from parent[i] "
+                          "(-1: the world) by joint[i] (0 revolute, 1 prismatic, 2 fixed, 3 free: body 0 only, the floating "
+                          "base, Pinocchio's free flyer: q [x y z qx qy qz qw], velocities [v; w] in the base frame) along "
+                          "axis[i] (joint frame); "
                           "the joint frame is (E_tree[i], r_tree[i]) in the parent's (Featherstone's Plücker transform: E "
                           "rotates parent coordinates into joint coordinates, r is the joint origin in the parent frame); "
                           "body i's mass, centre of mass and inertia about it in its own frame.")
@@ -95,20 +97,22 @@ void bind_dynamics(nb::module_& m) {
             }
             md.gravity_w = kestrel::Vec3(gravity.data()[0], gravity.data()[1], gravity.data()[2]);
             need(dy::finish_model(md) == kestrel::Status::ok,
-                 "Multibody: invalid tree (expected parent[i] in [-1, i), joint 0/1/2, unit axes, positive masses, "
-                 "finite symmetric inertias with a positive diagonal)");
+                 "Multibody: invalid tree (expected parent[i] in [-1, i), joint 0/1/2, or 3 for body 0 from the world "
+                 "without armature or damping, unit axes, positive masses, finite symmetric inertias with a positive "
+                 "diagonal)");
           },
           "parent"_a, "joint"_a, "axis"_a, "E_tree"_a, "r_tree"_a, "mass"_a, "com"_a, "inertia"_a, "gravity"_a,
           "armature"_a = nb::none(), "damping"_a = nb::none())
-      .def_prop_ro("num_dofs", [](const PyMultibody& s) { return s.model.num_dofs; })
+      .def_prop_ro("num_dofs", [](const PyMultibody& s) { return s.model.num_dofs; }, "velocity coordinates (nv)")
+      .def_prop_ro("num_q", [](const PyMultibody& s) { return s.model.num_q; }, "configuration coordinates (nq)")
       .def(
           "rnea",
           [](PyMultibody& s, Arr q, Arr qd, Arr qdd) {
             const std::size_t n = static_cast<std::size_t>(s.model.num_dofs);
-            need_shape(q, {n}, "q");
+            need_shape(q, {static_cast<std::size_t>(s.model.num_q)}, "q");
             need_shape(qd, {n}, "qd");
             need_shape(qdd, {n}, "qdd");
-            real tau[kPyMaxBodies] = {};
+            real tau[dy::max_dofs<kPyMaxBodies>()] = {};
             dy::rnea(s.model, s.data, q.data(), qd.data(), qdd.data(), tau);
             return vector_out(tau, n);
           },
@@ -117,12 +121,12 @@ void bind_dynamics(nb::module_& m) {
           "aba",
           [](PyMultibody& s, Arr q, Arr qd, Arr tau) {
             const std::size_t n = static_cast<std::size_t>(s.model.num_dofs);
-            need_shape(q, {n}, "q");
+            need_shape(q, {static_cast<std::size_t>(s.model.num_q)}, "q");
             need_shape(qd, {n}, "qd");
             need_shape(tau, {n}, "tau");
-            real qdd[kPyMaxBodies] = {};
+            real qdd[dy::max_dofs<kPyMaxBodies>()] = {};
             need(dy::aba(s.model, s.data, q.data(), qd.data(), tau.data(), qdd) == kestrel::Status::ok,
-                 "q/qd/tau: non-finite values (the core refuses them)");
+                 "q/qd/tau: non-finite values or a base quaternion off unit length (the core refuses them)");
             return vector_out(qdd, n);
           },
           "q"_a, "qd"_a, "tau"_a, "Forward dynamics (ABA): the accelerations under the joint forces tau at (q, qd).")
@@ -130,7 +134,7 @@ void bind_dynamics(nb::module_& m) {
           "crba",
           [](PyMultibody& s, Arr q) {
             const std::size_t n = static_cast<std::size_t>(s.model.num_dofs);
-            need_shape(q, {n}, "q");
+            need_shape(q, {static_cast<std::size_t>(s.model.num_q)}, "q");
             real* H = new real[n * n];
             dy::crba(s.model, s.data, q.data(), H, static_cast<int>(n));
             nb::capsule owner(H, [](void* p) noexcept { delete[] static_cast<real*>(p); });
@@ -141,7 +145,7 @@ void bind_dynamics(nb::module_& m) {
           "point_jacobian",
           [](PyMultibody& s, Arr q, int body, Arr point) {
             const std::size_t n = static_cast<std::size_t>(s.model.num_dofs);
-            need_shape(q, {n}, "q");
+            need_shape(q, {static_cast<std::size_t>(s.model.num_q)}, "q");
             need_shape(point, {3}, "point");
             need(body >= 0 && body < s.model.num_bodies, "body: expected an index in [0, " + std::to_string(s.model.num_bodies) + ")");
             dy::Transform X_world[kPyMaxBodies];

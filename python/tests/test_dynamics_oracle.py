@@ -1,7 +1,7 @@
 """The core's articulated-body dynamics (dynamics/multibody.hpp through kestrel._core.Multibody)
 against Pinocchio (`pin` from PyPI) on the same random trees of revolute, prismatic and fixed
-joints: inverse dynamics (RNEA), forward dynamics (ABA) and the joint-space mass matrix (CRBA) on
-1000 random states. The core runs in float32 here (the package's build), Pinocchio in double: the
+joints, on a fixed base and on a floating one (Pinocchio's free flyer): inverse dynamics (RNEA),
+forward dynamics (ABA) and the joint-space mass matrix (CRBA) on 1000 random states each. The core runs in float32 here (the package's build), Pinocchio in double: the
 tolerance is float32's, relative to each quantity's scale."""
 
 import numpy as np
@@ -9,7 +9,7 @@ import pinocchio as pin
 
 import kestrel
 
-REVOLUTE, PRISMATIC, FIXED = 0, 1, 2
+REVOLUTE, PRISMATIC, FIXED, FREE = 0, 1, 2, 3
 
 
 def random_tree(rng: np.random.Generator, n: int):
@@ -55,32 +55,54 @@ def pinocchio_model(parent, joint, axis, E, r, mass, com, inertia, gravity, arma
             model.appendBodyToJoint(p_joint, body_inertia, place)
             owner.append((p_joint, place))
             continue
-        jm = pin.JointModelRevoluteUnaligned(axis[i]) if joint[i] == REVOLUTE else pin.JointModelPrismaticUnaligned(axis[i])
+        if joint[i] == FREE:
+            jm = pin.JointModelFreeFlyer()
+        elif joint[i] == REVOLUTE:
+            jm = pin.JointModelRevoluteUnaligned(axis[i])
+        else:
+            jm = pin.JointModelPrismaticUnaligned(axis[i])
         jid = model.addJoint(p_joint, jm, place, f"j{i}")
         model.appendBodyToJoint(jid, body_inertia, pin.SE3.Identity())
         owner.append((jid, pin.SE3.Identity()))
     if armature is not None:  # per dof, in body order (the movable joints')
-        model.armature = np.array([armature[i] for i in range(len(parent)) if joint[i] != FIXED])
+        model.armature = np.concatenate([np.zeros(6) if joint[i] == FREE else [armature[i]]
+                                         for i in range(len(parent)) if joint[i] != FIXED])
     return model, owner
 
 
-def test_rnea_aba_crba_agree_with_pinocchio():
-    rng = np.random.default_rng(12)
+def random_q(rng, n_q, floating):
+    q = rng.uniform(-2, 2, n_q)
+    if floating:  # [x y z qx qy qz qw]: a unit quaternion
+        quat = rng.normal(size=4)
+        q[3:7] = quat / np.linalg.norm(quat)
+    return q
+
+
+import pytest
+
+
+@pytest.mark.parametrize("floating", [False, True])
+def test_rnea_aba_crba_agree_with_pinocchio(floating):
+    rng = np.random.default_rng(12 + floating)
     gravity = np.array([0.0, 0.0, -9.81])
     states = 0
     worst = {"rnea": 0.0, "aba": 0.0, "crba": 0.0}
     for tree in range(10):
-        arrays = random_tree(rng, 3 + tree % 8)
+        arrays = random_tree(rng, (2 if floating else 3) + tree % 8)
+        if floating:
+            arrays[1][0] = FREE
         f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
         # Half the trees with rotor inertia (armature), which both add to the mass matrix's diagonal.
         armature = rng.uniform(0, 0.05, len(arrays[0])).astype(np.float32) if tree % 2 else np.zeros(len(arrays[0]), np.float32)
+        if floating:
+            armature[0] = 0  # none on the free joint
         core = kestrel.Multibody(*f32, gravity=gravity.astype(np.float32), armature=armature)
         model, _ = pinocchio_model(*arrays, gravity, armature=armature.astype(np.float64))
         data = model.createData()
         n = core.num_dofs
-        assert model.nq == n and model.nv == n
+        assert model.nq == core.num_q and model.nv == n and core.num_q == n + (1 if floating else 0)
         for _ in range(100):
-            q, v, a = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
+            q, v, a = random_q(rng, core.num_q, floating), rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
             q32, v32, a32 = (x.astype(np.float32) for x in (q, v, a))
             # Each side's inputs are the same float32 numbers.
             q, v, a = (x.astype(np.float64) for x in (q32, v32, a32))
@@ -97,15 +119,14 @@ def test_rnea_aba_crba_agree_with_pinocchio():
             worst["crba"] = max(worst["crba"], np.abs(M - M_ref).max() / (1 + np.abs(M_ref).max()))
             states += 1
     assert states == 1000
-    print("worst relative differences, core (float32) vs Pinocchio (double):", worst)
+    print("worst relative differences, core (float32) vs Pinocchio (double), floating base" if floating else
+          "worst relative differences, core (float32) vs Pinocchio (double), fixed base", worst)
     # float32 against double: measured 1.5e-6 (RNEA), 7.1e-6 (ABA), 4.2e-7 (CRBA) relative to
     # each quantity's scale; a wrong term (a sign, a transform) is off by far more than this.
     assert worst["rnea"] < 2e-5 and worst["crba"] < 2e-5 and worst["aba"] < 1e-4, worst
 
 
 def test_refuses_bad_trees_with_the_argument_named():
-    import pytest
-
     rng = np.random.default_rng(3)
     parent, joint, axis, E, r, mass, com, inertia = (a.astype(np.float32) if a.dtype.kind == "f" else a
                                                      for a in random_tree(rng, 4))
@@ -126,15 +147,18 @@ def test_refuses_bad_trees_with_the_argument_named():
         core.point_jacobian(np.zeros(n, np.float32), 9, np.zeros(3, np.float32))
 
 
-def test_point_jacobians_agree_with_pinocchio():
+@pytest.mark.parametrize("floating", [False, True])
+def test_point_jacobians_agree_with_pinocchio(floating):
     """The Jacobian of a random point on every body (world-aligned, linear rows first) against
     Pinocchio's frame Jacobian (LOCAL_WORLD_ALIGNED) at a frame placed on that point."""
-    rng = np.random.default_rng(21)
+    rng = np.random.default_rng(21 + floating)
     g = np.array([0.0, 0.0, -9.81])
     worst = 0.0
     checked = 0
     for tree in range(8):
         arrays = random_tree(rng, 3 + tree % 6)
+        if floating:
+            arrays[1][0] = FREE
         f32 = [a.astype(np.float32) if a.dtype.kind == "f" else a for a in arrays]
         core = kestrel.Multibody(*f32, gravity=g.astype(np.float32))
         model, owner = pinocchio_model(*arrays, g)
@@ -143,7 +167,7 @@ def test_point_jacobians_agree_with_pinocchio():
                   for b, (jid, place) in enumerate(owner)]
         data = model.createData()
         for _ in range(20):
-            q32 = rng.uniform(-2, 2, core.num_dofs).astype(np.float32)
+            q32 = random_q(rng, core.num_q, floating).astype(np.float32)
             q = q32.astype(np.float64)
             for b, fid in enumerate(frames):
                 J_ref = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)

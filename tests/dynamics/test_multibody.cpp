@@ -2,7 +2,8 @@
 // MCU: a pendulum against its closed form; random trees of revolute, prismatic and fixed joints
 // (half with armature and joint damping) where ABA inverts RNEA, CRBA's mass matrix is symmetric
 // positive definite and reproduces RNEA's torques (H qdd + bias = tau); the kinetic energy; point
-// Jacobians against the twists of RNEA's forward pass; refusals; no heap.
+// Jacobians against the twists of RNEA's forward pass; the same on floating-base trees, and a free
+// body against Newton-Euler; refusals; no heap.
 #include <cmath>
 #include <limits>
 
@@ -34,7 +35,7 @@ Vec3 unit(RngStream& r) {
 }
 
 template <int N>
-void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream) {
+void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream, bool floating = false) {
   RngStream r(2026, stream, 1);
   m.num_bodies = bodies;
   for (int i = 0; i < bodies; ++i) {
@@ -55,6 +56,26 @@ void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream) {
     m.body[i].inertia_com = real(0.5) * (m.body[i].inertia_com + m.body[i].inertia_com.transpose());
     m.armature[i] = stream % 2 == 0 ? r.uniform(0, 0.05_r) : 0;  // half the trees with rotor inertia and damping
     m.damping[i] = stream % 2 == 0 ? r.uniform(0, 0.5_r) : 0;
+  }
+  if (floating) {
+    m.joint[0] = dy::JointType::free;
+    m.armature[0] = m.damping[0] = 0;
+  }
+}
+
+// A random configuration (unit base quaternion for a floating tree) and velocities.
+template <int N>
+void random_state(const dy::MultibodyModel<N>& m, RngStream& r, real* q, real* qd) {
+  for (int k = 0; k < m.num_q; ++k) q[k] = r.uniform(-2, 2);
+  for (int k = 0; k < m.num_dofs; ++k) qd[k] = r.uniform(-2, 2);
+  if (m.joint[0] == dy::JointType::free) {
+    real* quat = q + m.q_index[0] + 3;
+    const Vec3 a = unit(r);
+    const Quat Q(Eigen::AngleAxis<real>(r.uniform(-3, 3), a));
+    quat[0] = Q.x();
+    quat[1] = Q.y();
+    quat[2] = Q.z();
+    quat[3] = Q.w();
   }
 }
 
@@ -216,4 +237,140 @@ KTEST(Multibody, RefusesBadModelsAndInputs) {
   KEXPECT_TRUE(dy::aba(m, d, q, qd, nan_tau, qdd) == Status::non_finite_input);
   KEXPECT_EQ(qdd[0], 42);  // untouched
   KEXPECT_EQ(qdd[1], 42);
+}
+
+// One free body (the floating base alone) against the Newton-Euler equations in its frame, with
+// the centre of mass at its origin: f = m (dv/dt + w x v) - m R^T g, n = I dw/dt + w x I w.
+KTEST(Multibody, FreeBodyFollowsNewtonEuler) {
+  dy::MultibodyModel<1> m;
+  m.num_bodies = 1;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::free;
+  const real mass = 2.0_r;
+  const Vec3 Idiag(0.02_r, 0.03_r, 0.05_r);
+  m.body[0] = body(mass, Vec3::Zero(), Idiag);
+  KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+  KEXPECT_EQ(m.num_dofs, 6);
+  KEXPECT_EQ(m.num_q, 7);
+  dy::MultibodyData<1> d;
+  const Quat Q(Eigen::AngleAxis<real>(0.8_r, Vec3(1, 2, 3).normalized()));
+  const real q[7] = {0.5_r, -1, 2, Q.x(), Q.y(), Q.z(), Q.w()};
+  const Vec3 v(0.3_r, -0.2_r, 0.1_r), w(1.0_r, -0.5_r, 2.0_r), f(1, 2, -3), n(0.01_r, -0.02_r, 0.03_r);
+  const real qd[6] = {v[0], v[1], v[2], w[0], w[1], w[2]};
+  const real tau[6] = {f[0], f[1], f[2], n[0], n[1], n[2]};
+  real qdd[6] = {};
+  Status st = Status::invalid_argument;
+  KEXPECT_NO_HEAP(st = dy::aba(m, d, q, qd, tau, qdd));
+  KASSERT_TRUE(st == Status::ok);
+  const Mat3 I = Idiag.asDiagonal();
+  const Vec3 g_b = Q.toRotationMatrix().transpose() * m.gravity_w;
+  const Vec3 dw = I.inverse() * (n - w.cross(I * w));
+  const Vec3 dv = f / mass - w.cross(v) + g_b;
+  for (int a = 0; a < 3; ++a) {
+    KEXPECT_NEAR(qdd[a], dv[a], kTol * 10);
+    KEXPECT_NEAR(qdd[3 + a], dw[a], kTol * 10 * (1 + dw.norm()));
+  }
+  real back[6];
+  dy::rnea(m, d, q, qd, qdd, back);
+  for (int k = 0; k < 6; ++k) KEXPECT_NEAR(back[k], tau[k], kTol * 20);
+  // At rest with no wrench: it falls, gravity in its own frame, and does not turn.
+  const real zero[6] = {};
+  KEXPECT_TRUE(dy::aba(m, d, q, zero, zero, qdd) == Status::ok);
+  for (int a = 0; a < 3; ++a) {
+    KEXPECT_NEAR(qdd[a], g_b[a], kTol * 10);
+    KEXPECT_NEAR(qdd[3 + a], 0, kTol);
+  }
+  // A quaternion far from unit length is refused; qdd untouched.
+  real q_bad[7] = {0, 0, 0, 0, 0, 0, 0.5_r};
+  qdd[0] = 42;
+  KEXPECT_TRUE(dy::aba(m, d, q_bad, zero, zero, qdd) == Status::non_finite_input);
+  KEXPECT_EQ(qdd[0], 42);
+  // A free joint anywhere but on body 0 from the world, or with armature, is refused.
+  dy::MultibodyModel<2> two;
+  two.num_bodies = 2;
+  two.parent[0] = -1;
+  two.parent[1] = 0;
+  two.joint[0] = dy::JointType::revolute;
+  two.axis[0] = Vec3(0, 0, 1);
+  two.joint[1] = dy::JointType::free;
+  two.body[0] = two.body[1] = body(1, Vec3::Zero(), Vec3(0.1_r, 0.1_r, 0.1_r));
+  KEXPECT_TRUE(dy::finish_model(two) == Status::invalid_argument);
+  m.armature[0] = 0.1_r;
+  KEXPECT_TRUE(dy::finish_model(m) == Status::invalid_argument);
+}
+
+// Floating-base trees (a free joint at the root, the rest random): ABA inverts RNEA, CRBA's
+// (6 + n)-square mass matrix is symmetric positive definite with H qdd + bias = tau and the
+// kinetic energy 1/2 qd^T H qd, and point Jacobians give the point velocities.
+KTEST(Multibody, FloatingBaseTreesAreConsistent) {
+  constexpr int kDofs = dy::max_dofs<kMax>();
+  static dy::Transform X_world[kMax];
+  for (std::uint32_t tree = 0; tree < 12; ++tree) {
+    dy::MultibodyModel<kMax>& m = g_model;
+    m = dy::MultibodyModel<kMax>();
+    random_tree(m, 2 + static_cast<int>(tree % 7), 300 + tree, true);
+    KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+    const int n = m.num_dofs;
+    KEXPECT_EQ(m.num_q, n + 1);
+    RngStream r(11, tree, 4);
+    real q[kDofs + 1], qd[kDofs], qdd[kDofs], tau[kDofs], bias[kDofs], zero[kDofs] = {}, back[kDofs];
+    random_state(m, r, q, qd);
+    for (int k = 0; k < n; ++k) qdd[k] = r.uniform(-3, 3);
+    dy::rnea(m, g_data, q, qd, qdd, tau);
+    Status st = Status::invalid_argument;
+    KEXPECT_NO_HEAP(st = dy::aba(m, g_data, q, qd, tau, back));
+    KEXPECT_TRUE(st == Status::ok);
+    for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
+    dy::rnea(m, g_data, q, qd, zero, bias);
+    static real H[kDofs * kDofs];
+    for (real& h : H) h = std::numeric_limits<real>::quiet_NaN();
+    dy::crba(m, g_data, q, H, kDofs);
+    Eigen::Matrix<real, kDofs, kDofs> Hm = Eigen::Matrix<real, kDofs, kDofs>::Identity();
+    real scale = 0;
+    for (int k = 0; k < n; ++k) scale = std::max(scale, std::fabs(tau[k]));
+    for (int i = 0; i < n; ++i) {
+      real s = bias[i];
+      for (int j = 0; j < n; ++j) {
+        Hm(i, j) = H[kDofs * i + j];
+        s += H[kDofs * i + j] * qdd[j];
+        KEXPECT_NEAR(H[kDofs * i + j], H[kDofs * j + i], kTol * 10);
+      }
+      KEXPECT_NEAR(s, tau[i], kTol * 10 * (1 + scale));
+    }
+    Eigen::LLT<Eigen::Matrix<real, kDofs, kDofs>> llt(Hm);
+    KEXPECT_TRUE(llt.info() == Eigen::Success);
+    // The base block is the whole tree's inertia: its mass on the linear diagonal.
+    real total_mass = 0;
+    for (int b = 0; b < m.num_bodies; ++b) total_mass += m.body[b].mass;
+    for (int a = 0; a < 3; ++a) KEXPECT_NEAR(H[kDofs * a + a], total_mass, kTol * 10 * total_mass);
+    real ke_joint = 0, ke_bodies = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kDofs * i + j] * qd[j];
+    dy::rnea(m, g_data, q, qd, zero, bias);  // body twists in g_data.v
+    for (int b = 0; b < m.num_bodies; ++b) {
+      ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
+      const int k = m.dof_index[b];
+      if (k >= 0 && m.joint[b] != dy::JointType::free) ke_bodies += real(0.5) * m.armature[b] * qd[k] * qd[k];
+    }
+    KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
+    dy::MultibodyData<kMax> d2;
+    dy::forward_kinematics(m, d2, q, X_world);
+    for (int b = 0; b < m.num_bodies; ++b) {
+      const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
+      static real J[6 * kDofs];
+      dy::point_jacobian(m, d2, X_world, b, p_b, J, kDofs);
+      const Mat3 Et = X_world[b].E.transpose();
+      const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
+      const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;
+      for (int a = 0; a < 3; ++a) {
+        real jv = 0, jw = 0;
+        for (int k = 0; k < n; ++k) {
+          jv += J[kDofs * a + k] * qd[k];
+          jw += J[kDofs * (3 + a) + k] * qd[k];
+        }
+        KEXPECT_NEAR(jv, want_v[a], kTol * 20 * (1 + want_v.norm()));
+        KEXPECT_NEAR(jw, want_w[a], kTol * 20 * (1 + want_w.norm()));
+      }
+    }
+  }
 }

@@ -1,4 +1,4 @@
-// Kinematic trees of rigid bodies with a fixed base and their dynamics, after R. Featherstone,
+// Kinematic trees of rigid bodies on a fixed or floating base and their dynamics, after R. Featherstone,
 // "Rigid Body Dynamics Algorithms", Springer 2008 (RBDA):
 //   rnea  inverse dynamics, the recursive Newton-Euler algorithm (RBDA table 5.1);
 //   crba  the joint-space mass matrix, the composite-rigid-body algorithm (RBDA table 6.2);
@@ -7,16 +7,28 @@
 // Each is a free function over a read-only model and a data object of fixed capacity, as
 // Pinocchio's algorithms over (Model, Data): no heap, no exceptions, float or double.
 //
-// Bodies are numbered so that a body's parent has a smaller index (-1: the fixed base, whose
-// frame is the world frame, z up). Body i hangs from its parent by joint i: a revolute or
-// prismatic joint with one degree of freedom along `axis` (a unit vector in the joint frame), or a
-// fixed joint with none. The joint frame sits at X_tree[i] in the parent's frame; body i's frame
-// is the joint frame moved by the joint: X_J(q) (rotation about / translation along the axis).
+// Bodies are numbered so that a body's parent has a smaller index (-1: the world, z up). Body i
+// hangs from its parent by joint i: a revolute or prismatic joint with one degree of freedom along
+// `axis` (a unit vector in the joint frame), a fixed joint with none, or, for body 0 only, a free
+// joint: the floating base (six degrees of freedom, RBDA section 9.3). The joint frame sits at
+// X_tree[i] in the parent's frame; body i's frame is the joint frame moved by the joint: X_J(q)
+// (rotation about / translation along the axis; the base's pose for the free joint).
 // Capacities are template parameters; the degrees of freedom are numbered in body order.
+//
+// Coordinates (Pinocchio's, so that its models compare entry by entry): the configuration q has
+// num_q entries and the velocities, accelerations and forces num_dofs. A free joint takes 7
+// configuration entries [position of the base origin in the world (3), orientation quaternion
+// base -> world, x y z w (4), unit] and 6 velocity entries [linear velocity of the base origin (3),
+// angular velocity (3)], both in the base's own frame; its accelerations are the time
+// derivatives of those (the base's spatial acceleration in its frame) and its "joint forces" the
+// wrench on the base [force (3), moment about its origin (3)] in its frame. Every other joint
+// takes one entry of each, or none.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
+
+#include <Eigen/Cholesky>
 
 #include "kestrel/dynamics/spatial.hpp"
 #include "kestrel/kernel/math.hpp"
@@ -24,23 +36,25 @@
 
 namespace kestrel::dynamics {
 
-enum class JointType : std::uint8_t { revolute = 0, prismatic = 1, fixed = 2 };
+enum class JointType : std::uint8_t { revolute = 0, prismatic = 1, fixed = 2, free = 3 };
 
 template <int kMaxBodies>
 struct MultibodyModel {
   static_assert(kMaxBodies > 0, "a tree needs room for a body");
   static constexpr int max_bodies = kMaxBodies;
   int num_bodies = 0;
-  int num_dofs = 0;                   // set by finish_model
-  int parent[kMaxBodies] = {};        // -1: the base
+  int num_dofs = 0;                   // velocity coordinates, set by finish_model
+  int num_q = 0;                      // configuration coordinates (num_dofs + 1 with a floating base)
+  int parent[kMaxBodies] = {};        // -1: the world
   JointType joint[kMaxBodies] = {};
   Vec3 axis[kMaxBodies];              // unit, joint frame
   Transform X_tree[kMaxBodies];       // parent frame -> joint frame
   SpatialInertia body[kMaxBodies];    // in the body's frame
-  int dof_index[kMaxBodies] = {};     // first dof of joint i (set by finish_model; -1 for fixed)
+  int dof_index[kMaxBodies] = {};     // first velocity coordinate of joint i (set by finish_model; -1 for fixed)
+  int q_index[kMaxBodies] = {};       // first configuration coordinate of joint i (-1 for fixed)
   // Per joint: the reflected rotor inertia (kg m^2 or kg, added to the mass matrix's diagonal, as
   // MuJoCo's and Pinocchio's armature) and viscous damping (N m s/rad or N s/m: a joint force
-  // -damping * qd).
+  // -damping * qd). Zero for a free joint.
   real armature[kMaxBodies] = {};
   real damping[kMaxBodies] = {};
   Vec3 gravity_w = Vec3(0, 0, -9.81_r);
@@ -55,16 +69,26 @@ struct MultibodyData {
   real d[kMaxBodies] = {}, u[kMaxBodies] = {};
 };
 
+/// The largest number of velocity coordinates of a tree of capacity N (a floating base adds 5).
+template <int N>
+constexpr int max_dofs() {
+  return N + 5;
+}
+
 /// Numbers the degrees of freedom and checks the model: parents before children, unit axes,
-/// positive masses and finite, symmetric positive semi-definite inertias with a positive diagonal.
-/// invalid_argument otherwise (the model is then unusable).
+/// positive masses and finite, symmetric positive semi-definite inertias with a positive diagonal,
+/// a free joint only as body 0's (from the world; no armature or damping). invalid_argument
+/// otherwise (the model is then unusable).
 template <int N>
 [[nodiscard]] Status finish_model(MultibodyModel<N>& m) {
   if (m.num_bodies < 1 || m.num_bodies > N || !all_finite(m.gravity_w)) return Status::invalid_argument;
-  int dof = 0;
+  int dof = 0, nq = 0;
   for (int i = 0; i < m.num_bodies; ++i) {
     if (m.parent[i] < -1 || m.parent[i] >= i) return Status::invalid_argument;
-    if (m.joint[i] != JointType::revolute && m.joint[i] != JointType::prismatic && m.joint[i] != JointType::fixed)
+    if (m.joint[i] != JointType::revolute && m.joint[i] != JointType::prismatic && m.joint[i] != JointType::fixed &&
+        m.joint[i] != JointType::free)
+      return Status::invalid_argument;
+    if (m.joint[i] == JointType::free && (i != 0 || m.parent[i] != -1 || m.armature[i] != 0 || m.damping[i] != 0))
       return Status::invalid_argument;
     const SpatialInertia& b = m.body[i];
     if (!(b.mass > 0) || !is_finite(b.mass) || !all_finite(b.com) || !all_finite(b.inertia_com) ||
@@ -74,24 +98,40 @@ template <int N>
     if (!(I(0, 0) > 0 && I(1, 1) > 0 && I(2, 2) > 0) || !(I - I.transpose()).isZero(real(1e-6) * I.trace()))
       return Status::invalid_argument;
     if (m.joint[i] == JointType::fixed) {
-      m.dof_index[i] = -1;
+      m.dof_index[i] = m.q_index[i] = -1;
+      continue;
+    }
+    if (m.joint[i] == JointType::free) {
+      m.dof_index[i] = dof;
+      m.q_index[i] = nq;
+      dof += 6;
+      nq += 7;
       continue;
     }
     if (!all_finite(m.axis[i]) || std::fabs(m.axis[i].norm() - 1) > real(1e-4)) return Status::invalid_argument;
     if (!(m.armature[i] >= 0) || !is_finite(m.armature[i]) || !(m.damping[i] >= 0) || !is_finite(m.damping[i]))
       return Status::invalid_argument;
     m.dof_index[i] = dof++;
+    m.q_index[i] = nq++;
   }
   m.num_dofs = dof;
+  m.num_q = nq;
   return Status::ok;
+}
+
+/// Velocity coordinates of joint i: 0, 1 or 6.
+template <int N>
+inline int joint_dofs(const MultibodyModel<N>& m, int i) {
+  return m.joint[i] == JointType::fixed ? 0 : (m.joint[i] == JointType::free ? 6 : 1);
 }
 
 namespace detail {
 /// X_J(q) and the motion subspace S of joint i (RBDA table 4.1: revolute E = rot(axis, q)^T,
 /// prismatic r = axis q).
 template <int N>
-inline void joint_transform(const MultibodyModel<N>& m, int i, real q, Transform& XJ, Vec6& S) {
+inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, Transform& XJ, Vec6& S) {
   const Vec3& a = m.axis[i];
+  const real q = qi != nullptr ? qi[0] : real(0);
   XJ = Transform();
   switch (m.joint[i]) {
     case JointType::revolute: {
@@ -111,6 +151,36 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, real q, Transform
     case JointType::fixed:
       S = Vec6::Zero();
       return;
+    case JointType::free: {
+      // World -> base: E = R^T with R the quaternion's rotation base -> world; r = the base's
+      // position. S is constant (joint_column): unused here.
+      const Quat Q(qi[6], qi[3], qi[4], qi[5]);  // wxyz constructor from [x y z w]
+      XJ.E = Q.toRotationMatrix().transpose();
+      XJ.r = Vec3(qi[0], qi[1], qi[2]);
+      S = Vec6::Zero();
+      return;
+    }
+  }
+}
+
+/// Column c of joint i's motion subspace (c < joint_dofs): S for a one-dof joint; for the free
+/// joint, the base-frame unit motions in the velocity coordinates' order [v; w] (linear first, as
+/// Pinocchio), which are spatial [0; e_c] for c < 3 and [e_(c-3); 0] after.
+template <int N>
+inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c) {
+  if (m.joint[i] != JointType::free) return d.S[i];
+  Vec6 s = Vec6::Zero();
+  s[c < 3 ? 3 + c : c - 3] = 1;
+  return s;
+}
+
+/// S qd for joint i's coordinates starting at qd (nullptr or a fixed joint: zero).
+template <int N>
+inline Vec6 joint_motion(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, const real* v) {
+  switch (m.joint[i]) {
+    case JointType::fixed: return Vec6::Zero();
+    case JointType::free: return spatial(Vec3(v[3], v[4], v[5]), Vec3(v[0], v[1], v[2]));
+    default: return d.S[i] * v[0];
   }
 }
 
@@ -119,8 +189,8 @@ template <int N>
 inline void update_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q) {
   for (int i = 0; i < m.num_bodies; ++i) {
     Transform XJ;
-    const int k = m.dof_index[i];
-    joint_transform(m, i, k >= 0 ? q[k] : real(0), XJ, d.S[i]);
+    const int k = m.q_index[i];
+    joint_transform(m, i, k >= 0 ? q + k : nullptr, XJ, d.S[i]);
     d.Xup[i] = compose(XJ, m.X_tree[i]);
   }
 }
@@ -140,7 +210,8 @@ inline Mat6 to_parent(const Transform& X, const Mat6& I) {
 
 /// Inverse dynamics: the joint forces (N m, N) tau[num_dofs] that give the accelerations qdd at
 /// (q, qd) under gravity, with an optional external force per body (f_ext[i], body frame, RBDA's
-/// [n; f]; nullptr: none).
+/// [n; f]; nullptr: none). With a floating base, tau's first six entries are the wrench the base
+/// needs (zero for a motion the tree can make on its own).
 template <int N>
 void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* qdd, real* tau,
           const Vec6* f_ext = nullptr) {
@@ -148,18 +219,22 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
   const Vec6 a0 = detail::base_acceleration(m);
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], p = m.parent[i];
-    const Vec6 vJ = k >= 0 ? Vec6(d.S[i] * qd[k]) : Vec6::Zero();
+    const Vec6 vJ = k >= 0 ? detail::joint_motion(m, d, i, qd + k) : Vec6::Zero();
     const Vec6 vp = p >= 0 ? d.v[p] : Vec6::Zero();
     const Vec6 ap = p >= 0 ? d.a[p] : a0;
     d.v[i] = apply_motion(d.Xup[i], vp) + vJ;
     d.a[i] = apply_motion(d.Xup[i], ap) + cross_motion(d.v[i], vJ);
-    if (k >= 0) d.a[i] += d.S[i] * qdd[k];
+    if (k >= 0) d.a[i] += detail::joint_motion(m, d, i, qdd + k);
     d.f[i] = inertia_times(m.body[i], d.a[i]) + cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
     if (f_ext != nullptr) d.f[i] -= f_ext[i];
   }
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
-    if (k >= 0) tau[k] = d.S[i].dot(d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
+    if (m.joint[i] == JointType::free) {
+      for (int c = 0; c < 6; ++c) tau[k + c] = detail::joint_column(m, d, i, c).dot(d.f[i]);
+    } else if (k >= 0) {
+      tau[k] = d.S[i].dot(d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
+    }
     if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
   }
 }
@@ -176,33 +251,45 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
   for (int i = m.num_bodies - 1; i >= 0; --i)
     if (m.parent[i] >= 0) d.IA[m.parent[i]] += detail::to_parent(d.Xup[i], d.IA[i]);
   for (int i = 0; i < m.num_bodies; ++i) {
-    const int k = m.dof_index[i];
-    if (k < 0) continue;
-    Vec6 F = d.IA[i] * d.S[i];
-    H[ld * k + k] = d.S[i].dot(F) + m.armature[i];
-    for (int j = i; m.parent[j] >= 0;) {
-      F = apply_force_transpose(d.Xup[j], F);
-      j = m.parent[j];
-      const int kj = m.dof_index[j];
-      if (kj < 0) continue;
-      H[ld * k + kj] = H[ld * kj + k] = F.dot(d.S[j]);
+    const int k0 = m.dof_index[i];
+    for (int c = 0; c < joint_dofs(m, i); ++c) {  // each of joint i's columns
+      const int k = k0 + c;
+      const Vec6 Si = detail::joint_column(m, d, i, c);
+      Vec6 F = d.IA[i] * Si;
+      for (int c2 = 0; c2 <= c; ++c2)  // the block of joint i itself
+        H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::joint_column(m, d, i, c2).dot(F);
+      H[ld * k + k] += m.armature[i];
+      for (int j = i; m.parent[j] >= 0;) {
+        F = apply_force_transpose(d.Xup[j], F);
+        j = m.parent[j];
+        const int kj = m.dof_index[j];
+        for (int cj = 0; cj < joint_dofs(m, j); ++cj)
+          H[ld * k + kj + cj] = H[ld * (kj + cj) + k] = F.dot(detail::joint_column(m, d, j, cj));
+      }
     }
   }
 }
 
 /// Forward dynamics: the accelerations qdd[num_dofs] under the joint forces tau at (q, qd), with
-/// optional external forces as rnea. Status::ok; non_finite_input (qdd untouched) for a
-/// non-finite input or a singular articulated inertia (a joint with no inertia behind it).
+/// optional external forces as rnea (with a floating base, tau's first six entries are a wrench
+/// on the base, usually zero). Status::ok; non_finite_input (qdd untouched) for a non-finite
+/// input, a base quaternion off unit length by more than 1e-3, or a singular articulated inertia
+/// (a joint with no inertia behind it).
 template <int N>
 [[nodiscard]] Status aba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* tau,
                          real* qdd, const Vec6* f_ext = nullptr) {
   const int n = m.num_dofs;
-  if (!all_finite(q, n) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
+  if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
+  if (m.joint[0] == JointType::free) {
+    const real* qb = q + m.q_index[0] + 3;
+    if (std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) > real(1e-3))
+      return Status::non_finite_input;
+  }
   detail::update_kinematics(m, d, q);
   // Pass 1, base to tips: velocities, velocity-product accelerations, bias forces.
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], p = m.parent[i];
-    const Vec6 vJ = k >= 0 ? Vec6(d.S[i] * qd[k]) : Vec6::Zero();
+    const Vec6 vJ = k >= 0 ? detail::joint_motion(m, d, i, qd + k) : Vec6::Zero();
     d.v[i] = (p >= 0 ? apply_motion(d.Xup[i], d.v[p]) : Vec6::Zero()) + vJ;
     d.c[i] = cross_motion(d.v[i], vJ);
     d.IA[i] = inertia_matrix(m.body[i]);
@@ -212,6 +299,7 @@ template <int N>
   // Pass 2, tips to base: articulated inertias and bias forces.
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
+    if (m.joint[i] == JointType::free) continue;  // the root: solved in pass 3
     Mat6 Ia = d.IA[i];
     Vec6 pa = d.pA[i];
     if (k >= 0) {
@@ -231,10 +319,25 @@ template <int N>
   }
   // Pass 3, base to tips: accelerations.
   const Vec6 a0 = detail::base_acceleration(m);
-  real out[N];
+  real out[max_dofs<N>()];
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], p = m.parent[i];
     d.a[i] = apply_motion(d.Xup[i], p >= 0 ? d.a[p] : a0) + d.c[i];
+    if (m.joint[i] == JointType::free) {
+      // A six-dof joint to the world (RBDA section 9.3): the whole tree's articulated inertia
+      // IA at the base takes the base wrench, so the joint's spatial acceleration y solves
+      // IA (a + y) = tau_s - pA, with tau_s the wrench in spatial order [moment; force].
+      const Vec6 tau_s = spatial(Vec3(tau[k + 3], tau[k + 4], tau[k + 5]), Vec3(tau[k], tau[k + 1], tau[k + 2]));
+      const Eigen::LLT<Mat6> llt(d.IA[i]);
+      if (llt.info() != Eigen::Success) return Status::non_finite_input;
+      const Vec6 y = llt.solve(Vec6(tau_s - d.pA[i] - d.IA[i] * d.a[i]));
+      d.a[i] += y;
+      for (int c = 0; c < 3; ++c) {
+        out[k + c] = y[3 + c];  // linear first, as the velocity coordinates
+        out[k + 3 + c] = y[c];
+      }
+      continue;
+    }
     if (k < 0) continue;
     out[k] = (d.u[i] - d.U[i].dot(d.a[i])) / d.d[i];
     d.a[i] += d.S[i] * out[k];
@@ -264,16 +367,18 @@ void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const
     for (int c = 0; c < m.num_dofs; ++c) J[ld * r + c] = 0;
   const Vec3 p_w = X_world[body].r + X_world[body].E.transpose() * point_b;
   for (int j = body; j >= 0; j = m.parent[j]) {
-    const int k = m.dof_index[j];
-    if (k < 0) continue;
-    // Joint j's motion subspace in world coordinates: angular w, linear v at the world origin.
-    const Mat3 Et = X_world[j].E.transpose();
-    const Vec3 w = Et * ang(d.S[j]);
-    const Vec3 v = Et * lin(d.S[j]) + X_world[j].r.cross(w);
-    const Vec3 v_p = v + w.cross(p_w);
-    for (int a = 0; a < 3; ++a) {
-      J[ld * a + k] = v_p[a];
-      J[ld * (3 + a) + k] = w[a];
+    const int k0 = m.dof_index[j];
+    for (int c = 0; c < joint_dofs(m, j); ++c) {
+      // Joint j's motion subspace in world coordinates: angular w, linear v at the world origin.
+      const Vec6 Sj = detail::joint_column(m, d, j, c);
+      const Mat3 Et = X_world[j].E.transpose();
+      const Vec3 w = Et * ang(Sj);
+      const Vec3 v = Et * lin(Sj) + X_world[j].r.cross(w);
+      const Vec3 v_p = v + w.cross(p_w);
+      for (int a = 0; a < 3; ++a) {
+        J[ld * a + k0 + c] = v_p[a];
+        J[ld * (3 + a) + k0 + c] = w[a];
+      }
     }
   }
 }
