@@ -433,6 +433,28 @@ int main() {
     bench("crba_quadruped_legs_12dof", "fixed_base_13_bodies", 10, [] { dy::crba(legs, dd, q, H, 12); });
     bench("aba_quadruped_legs_12dof", "fixed_base_13_bodies", 10,
           [] { g_sink = static_cast<std::uint32_t>(dy::aba(legs, dd, q, qd, tau, qdd)); });
+    // The same quadruped on a floating trunk (free joint: 18 velocity, 19 configuration
+    // coordinates), as a legged robot is simulated: trunk tilted and moving.
+    static dy::MultibodyModel<13> robot;
+    static real fq[19], fqd[18], fqdd[18], ftau[18], fH[18 * 18];
+    robot = legs;
+    robot.joint[0] = dy::JointType::free;
+    if (dy::finish_model(robot) != Status::ok || robot.num_dofs != 18 || robot.num_q != 19) {
+      println("control bench: floating quadruped setup failed");
+      return 1;
+    }
+    const real trunk_q[7] = {0.1_r, -0.2_r, 0.3_r, 0.0499792_r, 0.0998334_r, 0, 0.9937403_r};  // unit quaternion
+    for (int k = 0; k < 7; ++k) fq[k] = trunk_q[k];
+    for (int k = 0; k < 12; ++k) fq[7 + k] = q[k];
+    for (int k = 0; k < 18; ++k) {
+      fqd[k] = k < 6 ? 0.2_r * static_cast<real>(k % 3) - 0.1_r : qd[k - 6];
+      fqdd[k] = k < 6 ? 0.5_r * static_cast<real>(k % 2) - 0.2_r : qdd[k - 6];
+    }
+    dy::rnea(robot, dd, fq, fqd, fqdd, ftau);
+    bench("rnea_quadruped_floating_18dof", "floating_base_13_bodies", 10, [] { dy::rnea(robot, dd, fq, fqd, fqdd, ftau); });
+    bench("crba_quadruped_floating_18dof", "floating_base_13_bodies", 10, [] { dy::crba(robot, dd, fq, fH, 18); });
+    bench("aba_quadruped_floating_18dof", "floating_base_13_bodies", 10,
+          [] { g_sink = static_cast<std::uint32_t>(dy::aba(robot, dd, fq, fqd, ftau, fqdd)); });
   }
   // The plant the firmware example closes the loop with (not part of the control stack).
   const Wrench hover_w = Wrench::from_vec6(hover_q);
