@@ -83,6 +83,82 @@ constexpr int kMax = 8;
 dy::MultibodyModel<kMax> g_model;
 dy::MultibodyData<kMax> g_data;
 
+// The Jacobian of a random point on each body, times qd, against the point's velocity from the
+// body twists that the last rnea(q, qd, ...) left in g_data.v (carried to the world).
+void check_point_jacobians(const dy::MultibodyModel<kMax>& m, const real* q, const real* qd, RngStream& r) {
+  constexpr int kDofs = dy::max_dofs<kMax>();
+  static dy::Transform X_world[kMax];
+  static dy::MultibodyData<kMax> d2;
+  static real J[6 * kDofs];
+  dy::forward_kinematics(m, d2, q, X_world);
+  for (int b = 0; b < m.num_bodies; ++b) {
+    const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
+    dy::point_jacobian(m, d2, X_world, b, p_b, J, kDofs);
+    const Mat3 Et = X_world[b].E.transpose();
+    const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
+    const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;
+    for (int a = 0; a < 3; ++a) {
+      real jv = 0, jw = 0;
+      for (int k = 0; k < m.num_dofs; ++k) {
+        jv += J[kDofs * a + k] * qd[k];
+        jw += J[kDofs * (3 + a) + k] * qd[k];
+      }
+      KEXPECT_NEAR(jv, want_v[a], kTol * 20 * (1 + want_v.norm()));
+      KEXPECT_NEAR(jw, want_w[a], kTol * 20 * (1 + want_w.norm()));
+    }
+  }
+}
+
+// On one tree at a random state: ABA inverts RNEA; CRBA's mass matrix is symmetric positive
+// definite with H qdd + bias = tau and 1/2 qd^T H qd the bodies' (and rotors') kinetic energy; a
+// floating base's block carries the whole tree's mass; point Jacobians give the point velocities.
+void check_consistency(const dy::MultibodyModel<kMax>& m, RngStream& r) {
+  constexpr int kDofs = dy::max_dofs<kMax>();
+  const int n = m.num_dofs;
+  real q[kDofs + 1] = {}, qd[kDofs] = {}, qdd[kDofs] = {}, tau[kDofs] = {}, bias[kDofs] = {}, zero[kDofs] = {}, back[kDofs] = {};
+  random_state(m, r, q, qd);
+  for (int k = 0; k < n; ++k) qdd[k] = r.uniform(-3, 3);
+  dy::rnea(m, g_data, q, qd, qdd, tau);
+  Status st = Status::invalid_argument;
+  KEXPECT_NO_HEAP(st = dy::aba(m, g_data, q, qd, tau, back));
+  KEXPECT_TRUE(st == Status::ok);
+  for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
+  dy::rnea(m, g_data, q, qd, zero, bias);
+  static real H[kDofs * kDofs];
+  for (real& h : H) h = std::numeric_limits<real>::quiet_NaN();
+  dy::crba(m, g_data, q, H, kDofs);
+  Eigen::Matrix<real, kDofs, kDofs> Hm = Eigen::Matrix<real, kDofs, kDofs>::Identity();
+  real scale = 0;
+  for (int k = 0; k < n; ++k) scale = std::max(scale, std::fabs(tau[k]));
+  for (int i = 0; i < n; ++i) {
+    real s = bias[i];
+    for (int j = 0; j < n; ++j) {
+      Hm(i, j) = H[kDofs * i + j];
+      s += H[kDofs * i + j] * qdd[j];
+      KEXPECT_NEAR(H[kDofs * i + j], H[kDofs * j + i], kTol * 10);
+    }
+    KEXPECT_NEAR(s, tau[i], kTol * 10 * (1 + scale));
+  }
+  Eigen::LLT<Eigen::Matrix<real, kDofs, kDofs>> llt(Hm);
+  KEXPECT_TRUE(llt.info() == Eigen::Success);
+  if (m.joint[0] == dy::JointType::free) {  // the base block is the whole tree's inertia
+    real total_mass = 0;
+    for (int b = 0; b < m.num_bodies; ++b) total_mass += m.body[b].mass;
+    for (int a = 0; a < 3; ++a) KEXPECT_NEAR(H[kDofs * a + a], total_mass, kTol * 10 * total_mass);
+  }
+  real ke_joint = 0, ke_bodies = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kDofs * i + j] * qd[j];
+  dy::rnea(m, g_data, q, qd, zero, bias);  // body twists in g_data.v
+  for (int b = 0; b < m.num_bodies; ++b) {
+    ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
+    const int k = m.dof_index[b];
+    if (k >= 0 && m.joint[b] != dy::JointType::free) ke_bodies += real(0.5) * m.armature[b] * qd[k] * qd[k];
+  }
+  KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
+  check_point_jacobians(m, q, qd, r);  // g_data.v holds the twists of the last rnea
+}
+
 }  // namespace
 
 KTEST(Multibody, PendulumMatchesItsClosedForm) {
@@ -113,92 +189,16 @@ KTEST(Multibody, PendulumMatchesItsClosedForm) {
   }
 }
 
+// Random fixed-base trees (half with armature and damping): check_consistency, Jacobians included.
 KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
   for (std::uint32_t tree = 0; tree < 20; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
     random_tree(m, 3 + static_cast<int>(tree % 6), tree);
     KASSERT_TRUE(dy::finish_model(m) == Status::ok);
-    const int n = m.num_dofs;
+    KEXPECT_EQ(m.num_q, m.num_dofs);
     RngStream r(7, tree, 2);
-    real q[kMax], qd[kMax], qdd[kMax], tau[kMax], bias[kMax], zero[kMax] = {}, back[kMax];
-    for (int k = 0; k < n; ++k) {
-      q[k] = r.uniform(-2, 2);
-      qd[k] = r.uniform(-2, 2);
-      qdd[k] = r.uniform(-3, 3);
-    }
-    dy::rnea(m, g_data, q, qd, qdd, tau);
-    Status st = Status::invalid_argument;
-    KEXPECT_NO_HEAP(st = dy::aba(m, g_data, q, qd, tau, back));
-    KEXPECT_TRUE(st == Status::ok);
-    for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
-    // H qdd + bias(q, qd) = tau, H symmetric positive definite, 1/2 qd^T H qd = kinetic energy.
-    dy::rnea(m, g_data, q, qd, zero, bias);
-    real H[kMax * kMax];
-    for (real& h : H) h = std::numeric_limits<real>::quiet_NaN();  // crba writes every entry it owns
-    dy::crba(m, g_data, q, H, kMax);
-    Eigen::Matrix<real, kMax, kMax> Hm = Eigen::Matrix<real, kMax, kMax>::Identity();
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) Hm(i, j) = H[kMax * i + j];
-    real scale = 0;
-    for (int k = 0; k < n; ++k) scale = std::max(scale, std::fabs(tau[k]));
-    for (int i = 0; i < n; ++i) {
-      real s = bias[i];
-      for (int j = 0; j < n; ++j) s += H[kMax * i + j] * qdd[j];
-      KEXPECT_NEAR(s, tau[i], kTol * 10 * (1 + scale));
-      for (int j = 0; j < n; ++j) KEXPECT_NEAR(H[kMax * i + j], H[kMax * j + i], kTol * 10);
-    }
-    Eigen::LLT<Eigen::Matrix<real, kMax, kMax>> llt(Hm);
-    KEXPECT_TRUE(llt.info() == Eigen::Success);
-    real ke_joint = 0, ke_bodies = 0;
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kMax * i + j] * qd[j];
-    dy::rnea(m, g_data, q, qd, zero, bias);  // leaves the body velocities in g_data.v
-    for (int b = 0; b < m.num_bodies; ++b) {
-      ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
-      const int k = m.dof_index[b];
-      if (k >= 0) ke_bodies += real(0.5) * m.armature[b] * qd[k] * qd[k];  // the rotors' own energy
-    }
-    KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
-  }
-}
-
-// The Jacobian of a point on each body, times the joint velocities, is the point's velocity that
-// RNEA's forward pass gives (body-frame twist carried to the world), on random trees.
-KTEST(Multibody, PointJacobianGivesThePointVelocity) {
-  static dy::Transform X_world[kMax];
-  for (std::uint32_t tree = 0; tree < 10; ++tree) {
-    dy::MultibodyModel<kMax>& m = g_model;
-    m = dy::MultibodyModel<kMax>();
-    random_tree(m, 3 + static_cast<int>(tree % 6), 100 + tree);
-    KASSERT_TRUE(dy::finish_model(m) == Status::ok);
-    const int n = m.num_dofs;
-    RngStream r(9, tree, 3);
-    real q[kMax], qd[kMax], zero[kMax] = {}, tau[kMax];
-    for (int k = 0; k < n; ++k) {
-      q[k] = r.uniform(-2, 2);
-      qd[k] = r.uniform(-2, 2);
-    }
-    dy::rnea(m, g_data, q, qd, zero, tau);  // leaves the body twists in g_data.v
-    dy::MultibodyData<kMax> d2;
-    dy::forward_kinematics(m, d2, q, X_world);
-    for (int b = 0; b < m.num_bodies; ++b) {
-      const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
-      real J[6 * kMax];
-      dy::point_jacobian(m, d2, X_world, b, p_b, J, kMax);
-      const Mat3 Et = X_world[b].E.transpose();
-      const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
-      const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;
-      for (int a = 0; a < 3; ++a) {
-        real jv = 0, jw = 0;
-        for (int k = 0; k < n; ++k) {
-          jv += J[kMax * a + k] * qd[k];
-          jw += J[kMax * (3 + a) + k] * qd[k];
-        }
-        KEXPECT_NEAR(jv, want_v[a], kTol * 20 * (1 + want_v.norm()));
-        KEXPECT_NEAR(jw, want_w[a], kTol * 20 * (1 + want_w.norm()));
-      }
-    }
+    check_consistency(m, r);
   }
 }
 
@@ -303,8 +303,6 @@ KTEST(Multibody, FreeBodyFollowsNewtonEuler) {
 // (6 + n)-square mass matrix is symmetric positive definite with H qdd + bias = tau and the
 // kinetic energy 1/2 qd^T H qd, and point Jacobians give the point velocities.
 KTEST(Multibody, FloatingBaseTreesAreConsistent) {
-  constexpr int kDofs = dy::max_dofs<kMax>();
-  static dy::Transform X_world[kMax];
   for (std::uint32_t tree = 0; tree < 12; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
@@ -313,64 +311,6 @@ KTEST(Multibody, FloatingBaseTreesAreConsistent) {
     const int n = m.num_dofs;
     KEXPECT_EQ(m.num_q, n + 1);
     RngStream r(11, tree, 4);
-    real q[kDofs + 1], qd[kDofs], qdd[kDofs], tau[kDofs], bias[kDofs], zero[kDofs] = {}, back[kDofs];
-    random_state(m, r, q, qd);
-    for (int k = 0; k < n; ++k) qdd[k] = r.uniform(-3, 3);
-    dy::rnea(m, g_data, q, qd, qdd, tau);
-    Status st = Status::invalid_argument;
-    KEXPECT_NO_HEAP(st = dy::aba(m, g_data, q, qd, tau, back));
-    KEXPECT_TRUE(st == Status::ok);
-    for (int k = 0; k < n; ++k) KEXPECT_NEAR(back[k], qdd[k], kTol * 50 * (1 + std::fabs(qdd[k])));
-    dy::rnea(m, g_data, q, qd, zero, bias);
-    static real H[kDofs * kDofs];
-    for (real& h : H) h = std::numeric_limits<real>::quiet_NaN();
-    dy::crba(m, g_data, q, H, kDofs);
-    Eigen::Matrix<real, kDofs, kDofs> Hm = Eigen::Matrix<real, kDofs, kDofs>::Identity();
-    real scale = 0;
-    for (int k = 0; k < n; ++k) scale = std::max(scale, std::fabs(tau[k]));
-    for (int i = 0; i < n; ++i) {
-      real s = bias[i];
-      for (int j = 0; j < n; ++j) {
-        Hm(i, j) = H[kDofs * i + j];
-        s += H[kDofs * i + j] * qdd[j];
-        KEXPECT_NEAR(H[kDofs * i + j], H[kDofs * j + i], kTol * 10);
-      }
-      KEXPECT_NEAR(s, tau[i], kTol * 10 * (1 + scale));
-    }
-    Eigen::LLT<Eigen::Matrix<real, kDofs, kDofs>> llt(Hm);
-    KEXPECT_TRUE(llt.info() == Eigen::Success);
-    // The base block is the whole tree's inertia: its mass on the linear diagonal.
-    real total_mass = 0;
-    for (int b = 0; b < m.num_bodies; ++b) total_mass += m.body[b].mass;
-    for (int a = 0; a < 3; ++a) KEXPECT_NEAR(H[kDofs * a + a], total_mass, kTol * 10 * total_mass);
-    real ke_joint = 0, ke_bodies = 0;
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) ke_joint += real(0.5) * qd[i] * H[kDofs * i + j] * qd[j];
-    dy::rnea(m, g_data, q, qd, zero, bias);  // body twists in g_data.v
-    for (int b = 0; b < m.num_bodies; ++b) {
-      ke_bodies += real(0.5) * g_data.v[b].dot(dy::inertia_times(m.body[b], g_data.v[b]));
-      const int k = m.dof_index[b];
-      if (k >= 0 && m.joint[b] != dy::JointType::free) ke_bodies += real(0.5) * m.armature[b] * qd[k] * qd[k];
-    }
-    KEXPECT_NEAR(ke_joint, ke_bodies, kTol * 10 * (1 + ke_bodies));
-    dy::MultibodyData<kMax> d2;
-    dy::forward_kinematics(m, d2, q, X_world);
-    for (int b = 0; b < m.num_bodies; ++b) {
-      const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
-      static real J[6 * kDofs];
-      dy::point_jacobian(m, d2, X_world, b, p_b, J, kDofs);
-      const Mat3 Et = X_world[b].E.transpose();
-      const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
-      const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;
-      for (int a = 0; a < 3; ++a) {
-        real jv = 0, jw = 0;
-        for (int k = 0; k < n; ++k) {
-          jv += J[kDofs * a + k] * qd[k];
-          jw += J[kDofs * (3 + a) + k] * qd[k];
-        }
-        KEXPECT_NEAR(jv, want_v[a], kTol * 20 * (1 + want_v.norm()));
-        KEXPECT_NEAR(jw, want_w[a], kTol * 20 * (1 + want_w.norm()));
-      }
-    }
+    check_consistency(m, r);
   }
 }
