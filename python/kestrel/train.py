@@ -367,7 +367,7 @@ _TASK_DEFAULTS: dict[str, dict] = {
     # navigation_task (bench/results/python/README.md): action repeat 5 (20 Hz decisions) with gamma
     # 0.98 per decision, 256 envs x 24 decisions per update, tanh-squashed actions, observation
     # normalisation (the range image and the distance); action repeat 1 never succeeded in 4.5 M
-    # env-steps. Best measured: 41 % at curriculum level 10 after 44 M env-steps (goal 80 %).
+    # env-steps. Best measured: 42 % at curriculum level 10 after 60 M env-steps (goal 80 %).
     "Kestrel-Navigation-v0": {"envs": 256, "steps": 80_000_000, "eval_every": 4_000_000, "rollout": 24,
                               "gamma": 0.98, "obs_norm": 1, "squash": 1, "action_repeat": 5, "init_std": 1.0},
 }
@@ -438,6 +438,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--init-std", type=float, default=None)
     p.add_argument("--reward-scale", type=float, default=0.02, help="rsl_rl: rewards times this (no value normalisation there)")
     p.add_argument("--episode-len", type=int, default=None, help="override task.episode_len_env_steps")
+    p.add_argument("--task-set", default=None,
+                   help="scenario `task:` keys as a JSON object, e.g. '{\"navigation\": {\"action_space\": \"velocity\"}}' "
+                        "(docs/scenario_reference.md; checked like a scenario's)")
     p.add_argument("--action-scale", default="auto",
                    help="normalised actions in [-1, 1] times these (comma list, one or one per action), 'none' for the "
                         "task's own +-10 actions; auto: " + ", ".join(f"{k} {v}" for k, v in _AUTO_ACTION_SCALE.items()))
@@ -469,8 +472,16 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     vframe = args.task in _VEHICLE_FRAME_OBS if args.vehicle_frame_obs == "auto" else args.vehicle_frame_obs == "on"
     if vframe:
         overrides["vehicle_frame_obs"] = True
+    if args.task_set:
+        try:
+            task_set = json.loads(args.task_set)
+        except json.JSONDecodeError as e:
+            raise SystemExit(f"--task-set: expected a JSON object of task section keys, got {args.task_set!r} ({e})")
+        if not isinstance(task_set, dict):
+            raise SystemExit(f"--task-set: expected a JSON object of task section keys, got {args.task_set!r}")
+        overrides["task"] = task_set
     if args.episode_len:
-        overrides["task"] = {"episode_len_env_steps": args.episode_len}
+        overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
     env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
     eval_overrides = dict(overrides)
