@@ -33,11 +33,6 @@ inline void position_setpoint_observation(const RigidBodyState& st, const Vec3& 
   position_setpoint_observation(st.position_w.data(), q.data(), v_b.data(), st.angvel_b.data(), target_w.data(), obs);
 }
 
-/// The same with the position error rotated about world z into the vehicle (yaw-only) frame, the
-/// frame Lee velocity control reads its command in (the Python env's vehicle_frame_obs option):
-/// [c s; -s c] e with (c, s) the yaw's cosine and sine taken from the observation's own quaternion
-/// as the normalised (w^2 + x^2 - y^2 - z^2, 2 (w z + x y)) (no atan2: identical bits on every
-/// target). A yaw-less attitude (both terms 0: pointing straight up or down) leaves e as it is.
 /// An observation built in float as the network's real type: `f` itself where real is float (no
 /// copy: the M4F image is ~50 B smaller), else copied into `buf` (n values).
 inline const real* observation_as_real(const float* f, real* buf, int n) {
@@ -51,6 +46,11 @@ inline const real* observation_as_real(const float* f, real* buf, int n) {
   }
 }
 
+/// The same with the position error rotated about world z into the vehicle (yaw-only) frame, the
+/// frame Lee velocity control reads its command in (the Python env's vehicle_frame_obs option):
+/// [c s; -s c] e with (c, s) the yaw's cosine and sine taken from the observation's own quaternion
+/// as the normalised (w^2 + x^2 - y^2 - z^2, 2 (w z + x y)) (no atan2: identical bits on every
+/// target). A yaw-less attitude (both terms 0: pointing straight up or down) leaves e as it is.
 inline void position_setpoint_observation_vehicle_frame(const RigidBodyState& st, const Vec3& target_w, float* obs) {
   position_setpoint_observation(st, target_w, obs);
   const float x = obs[3], y = obs[4], z = obs[5], w = obs[6];

@@ -210,13 +210,13 @@ struct NavigationRewardParams {
   real collision_penalty = -100.0f;
 };
 
-/// navigation_task's action scaling, image pooling and reward (task.navigation).
 /// How navigation_task's actions become the velocity controller's [vx, vy, vz, yaw_rate] command.
 /// forward_inclination (Aerial Gym's navigation_task_config.action_transformation_function): 3
 /// actions in [-1, 1]: speed (a0 + 1) / 2 x max_speed_m_s along the body's heading, tilted up or
 /// down by a1 x max_inclination_rad, and a2 x max_yaw_rate_rad_s; never sideways or backwards, so
 /// the vehicle moves where its forward sensor looks. velocity: 4 actions, each x its maximum.
 enum class NavigationActionSpace : std::uint8_t { forward_inclination = 0, velocity };
+/// navigation_task's action scaling, image pooling and reward (task.navigation).
 struct NavigationConfig {
   NavigationActionSpace action_space = NavigationActionSpace::forward_inclination;
   real max_speed_m_s = 2.0f;              // forward_inclination: the top speed; velocity: per axis
