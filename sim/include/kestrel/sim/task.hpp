@@ -180,10 +180,10 @@ void min_pool_image(const RangeImage& img, int rows, int cols, float* out);
 /// Then crash becomes 1 where d > 8 (written in place, existing 1s stay) and the reward is -20
 /// wherever crash > 0. The reference takes the task config's reward parameters, linear velocity
 /// and the actions but uses none of them (golden/README.md quirk 15), so they are not parameters.
-/// pos_error = target - position rotated into the yaw-only vehicle frame (vehicle_frame_error
-/// below), as the reference and the task pass it. Only its length d enters the reward, so the
-/// world-frame error gives the same reward to an ulp of d (tests/sim/tasks/task_test.cpp checks
-/// both within 1e-5 of the golden cases).
+/// pos_error = target - position. The reference rotates it into the yaw-only vehicle frame first
+/// (vehicle_frame_error below), but only its length d enters the reward and a rotation keeps the
+/// length: the task passes the world-frame error and saves the atan2, sin and cos per step (the
+/// reward moves by at most an ulp of d; tests/sim/tasks/task_test.cpp checks both within 1e-5).
 float position_setpoint_reward(const float pos_error[3], const float quat_xyzw[4], const float body_angvel[3],
                                float curriculum_multiplier, std::uint8_t& crash);
 
