@@ -87,7 +87,13 @@ Status fly_policy(const FlightConfig& c, FlightStack& s, Plant& p, ClockFn clock
         const real* obs = policy::observation_as_real(obs_f, obs_buf, policy::kPositionSetpointObsDim);
         real a[4];
         if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok) {
-          for (int i = 0; i < 4; ++i) action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
+          // The task's clip, as the simulator applies it; left out where the network cannot
+          // exceed it (checked at compile time: its squash and scale bound every action).
+          if constexpr (policy::actions_within(kPositionPolicy, kTaskActionClip)) {
+            for (int i = 0; i < 4; ++i) action[i] = a[i];
+          } else {
+            for (int i = 0; i < 4; ++i) action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
+          }
         } else {
           ++r.rejected_inferences;  // hold the last action
         }

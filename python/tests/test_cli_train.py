@@ -73,4 +73,5 @@ def test_kestrel_train_writes_tensorboard_csv_plot_checkpoints_and_onnx(tmp_path
     assert ex["vehicle_frame_obs"] is True and ex["observations"] >= 256
     assert ex["max_abs_diff_spec_vs_learner"] < 1e-5 and ex["max_abs_diff_onnx_vs_spec"] < 1e-5
     onnx.checker.check_model(onnx.load(ex["onnx"]))
-    assert "MlpParams<13, 64, 64, 4>" in (out / "policy.hpp").read_text()
+    # Trained without a normaliser, squashed into [-1, 1]: exported without either part (export.py).
+    assert "MlpParams<13, 64, 64, 4, 0u>" in (out / "policy.hpp").read_text()

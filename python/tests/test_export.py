@@ -73,13 +73,20 @@ def test_core_mlp_refuses_bad_input(recorded):
 
 
 @pytest.mark.skipif(shutil.which("g++") is None, reason="needs g++")
-def test_generated_header_is_exact_and_computes_the_same_actions(recorded, tmp_path):
+@pytest.mark.parametrize("kind", ["sb3_tanh_vecnormalize", "rsl_rl_elu_squash_no_normaliser"])
+def test_generated_header_is_exact_and_computes_the_same_actions(recorded, tmp_path, kind):
     data, model, venv = recorded
-    spec = export.from_sb3(model, venv)
+    lean = kind.startswith("rsl_rl")
+    spec = _rsl_rl_like_spec(obs_normalizer=False) if lean else export.from_sb3(model, venv)
     header = export.write_header(spec, str(tmp_path / "policy_weights.hpp"), name="kPolicy")
     text = pathlib.Path(header).read_text()
+    # The parts a network does without are left out of its type (policy/mlp.hpp MlpParts): an
+    # rsl_rl actor trained without a normaliser, squashed by tanh into [-1, 1], has neither the
+    # normalisation nor the action clamp; SB3's with VecNormalize keeps both.
+    assert ("MlpParams<13, 64, 64, 4, 0u>" in text) == lean
+    assert ("MlpParams<13, 64, 64, 4>" in text) == (not lean)
     # Every weight is written exactly (hex-float literals round-trip float32 bit for bit).
-    w1_text = text.split("kestrel::policy::Activation::tanh,")[1]
+    w1_text = text.split(f"kestrel::policy::Activation::{spec.activation},")[1]
     first = float.fromhex(w1_text.split("{{{")[1].split(",")[0])
     assert np.float32(first) == spec.weights[0][0, 0]
     # Compiled into a program, the header gives the binding's bits.
@@ -102,7 +109,7 @@ def test_generated_header_is_exact_and_computes_the_same_actions(recorded, tmp_p
     assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
 
 
-def _rsl_rl_like_spec(seed=0):
+def _rsl_rl_like_spec(seed=0, obs_normalizer=True):
     """An rsl-rl-lib MLPModel state dict (13-64-64-4, ELU) with an observation normaliser, exported
     as trained with squash=tanh and action_scale [2, 2, 2, 1] (kestrel train's position-setpoint defaults)."""
     rng = np.random.default_rng(seed)
@@ -111,7 +118,8 @@ def _rsl_rl_like_spec(seed=0):
           "mlp.4.weight": rng.normal(0, 0.15, (4, 64)), "mlp.4.bias": rng.normal(0, 0.1, 4),
           "obs_normalizer._mean": rng.normal(0, 1, (1, 13)), "obs_normalizer._std": rng.uniform(0.5, 3, (1, 13))}
     sd = {k: torch.from_numpy(v.astype(np.float32)) for k, v in sd.items()}
-    return export.from_rsl_rl(sd, -1, 1, activation="elu", squash="tanh", action_scale=[2, 2, 2, 1])
+    return export.from_rsl_rl(sd, -1, 1, activation="elu", squash="tanh", action_scale=[2, 2, 2, 1],
+                              obs_normalizer=obs_normalizer)
 
 
 @pytest.mark.parametrize("kind", ["sb3_tanh_vecnormalize", "rsl_rl_elu_squash"])

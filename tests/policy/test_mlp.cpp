@@ -313,3 +313,63 @@ KTEST(PolicyMlp, SameBitsOnEveryTarget) {
   KEXPECT_EQ(h, 20800889262732618ull);
 #endif
 }
+
+namespace {
+using LeanMlp = pl::MlpParams<13, 64, 64, 4, 0u>;  // no normalisation, no action clamp
+LeanMlp g_lean;
+}  // namespace
+
+KTEST(PolicyMlp, PartsLeftOutGiveTheSameBitsAsTheirIdentity) {
+  // The exporter leaves out an identity normalisation and a clamp a tanh squash cannot reach: the
+  // lean network must give the bits of the full one that carries them, and its flash is smaller.
+  static_assert(sizeof(LeanMlp) + 26 * sizeof(real) + sizeof(real) + 8 * sizeof(real) - 8 <= sizeof(TestMlp),
+                "the parts left out take no room");
+  random_mlp(g_mlp, pl::Activation::elu, 31);
+  g_mlp.output_squash = pl::Squash::tanh;
+  g_mlp.obs_clip = 3.0e38_r;
+  for (int i = 0; i < 13; ++i) {
+    g_mlp.obs_mean[i] = 0;
+    g_mlp.obs_inv_std[i] = 1;
+  }
+  g_lean.activation = g_mlp.activation;
+  g_lean.hidden1 = g_mlp.hidden1;
+  g_lean.hidden2 = g_mlp.hidden2;
+  g_lean.output = g_mlp.output;
+  for (int o = 0; o < 4; ++o) {
+    g_lean.action_scale[o] = g_mlp.action_scale[o];
+    g_lean.action_offset[o] = g_mlp.action_offset[o];
+  }
+  g_lean.output_squash = pl::Squash::tanh;
+  KEXPECT_TRUE(pl::validate_mlp(g_lean) == Status::ok);
+  RngStream r(32, 0, kPurposeUser);
+  int differ = 0;
+  for (int n = 0; n < 1000; ++n) {
+    real obs[13], a_full[4] = {}, a_lean[4] = {};
+    for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-40, 40);  // large: the squash saturates too
+    KEXPECT_TRUE(pl::mlp_forward(g_mlp, obs, a_full) == Status::ok);
+    KEXPECT_TRUE(pl::mlp_forward(g_lean, obs, a_lean) == Status::ok);
+    differ += std::memcmp(a_full, a_lean, sizeof a_full) != 0;
+  }
+  KEXPECT_EQ(differ, 0);
+  // Non-finite observations are refused without normalisation too, the action untouched.
+  real obs[13] = {}, a[4] = {7, 7, 7, 7};
+  obs[5] = std::numeric_limits<real>::infinity();
+  KEXPECT_TRUE(pl::mlp_forward(g_lean, obs, a) == Status::non_finite_input);
+  KEXPECT_TRUE(a[0] == 7 && a[3] == 7);
+  // Without a clamp the output must be squashed (else it is unbounded): refused.
+  g_lean.output_squash = pl::Squash::none;
+  KEXPECT_TRUE(pl::validate_mlp(g_lean) == Status::invalid_argument);
+  g_lean.output_squash = pl::Squash::tanh;
+  // The bound the firmware's task clip is checked against: |offset| + |scale| (tanh in [-1, 1]).
+  KEXPECT_TRUE(pl::max_abs_action(g_lean, 0) == 2 && pl::max_abs_action(g_lean, 2) == 2.5_r);
+  KEXPECT_TRUE(pl::actions_within(g_lean, 2.5_r) && !pl::actions_within(g_lean, 2.4_r));
+  // With a clamp, the tighter of it and the squash: [-1, 0.5] x 2 + 0 -> 2; unsquashed, the clamp's.
+  g_mlp.action_low[0] = -1;
+  g_mlp.action_high[0] = 0.5_r;
+  KEXPECT_TRUE(pl::max_abs_action(g_mlp, 0) == 2);
+  g_mlp.output_squash = pl::Squash::none;
+  g_mlp.action_low[0] = -3;
+  KEXPECT_TRUE(pl::max_abs_action(g_mlp, 0) == 6);
+  random_mlp(g_mlp, pl::Activation::tanh, 3);
+  g_mlp.output_squash = pl::Squash::none;
+}

@@ -185,8 +185,13 @@ __attribute__((noinline)) void policy_step(const kestrel::RigidBodyState& b, con
   real obs_buf[policy::kPositionSetpointObsDim];
   const real* obs = policy::observation_as_real(obs_f, obs_buf, policy::kPositionSetpointObsDim);
   real a[4];
-  if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok)
-    for (int i = 0; i < 4; ++i) g_action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
+  if (policy::mlp_forward(kPositionPolicy, obs, a) == Status::ok) {
+    if constexpr (policy::actions_within(kPositionPolicy, kTaskActionClip)) {  // as policy_loop.cpp
+      for (int i = 0; i < 4; ++i) g_action[i] = a[i];
+    } else {
+      for (int i = 0; i < 4; ++i) g_action[i] = clamp(a[i], -kTaskActionClip, kTaskActionClip);
+    }
+  }
   for (int i = 0; i < 4; ++i) g_out[i] = g_action[i];
 }
 

@@ -15,7 +15,7 @@
 //
 // On the Cortex-M4F/M7 the dense layers run as VFP assembly (detail::dense_vfp: chained VMLA, one
 // rounding after the multiply and one after the add, as the portable code, so the same bits;
-// tests/policy/test_mlp.cpp checks them against the plain loop), about 2.6x fewer instructions
+// tests/policy/test_mlp.cpp checks them against the plain loop), about 2.2x fewer instructions
 // per inference (bench/results/cortex-m4f/control.csv, the mlp_forward rows).
 //
 // Weights live wherever the caller puts them: a `const MlpParams` generated into flash by
@@ -25,6 +25,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/status.hpp"
@@ -48,24 +49,46 @@ struct DenseLayer {
   real bias[kOut];
 };
 
-template <int kObs, int kH1, int kH2, int kAct>
+/// The parts of a network besides its layers that a network may leave out, so that neither their
+/// numbers nor their code reach flash (a compile-time choice: MlpParams' last argument).
+enum MlpParts : unsigned {
+  kMlpObsNorm = 1u,      // observation normalisation: x = clamp((obs - mean) * inv_std, -clip, clip)
+  kMlpActionClamp = 2u,  // the clamp of the squashed output to [action_low, action_high]
+  kMlpAllParts = 3u,
+};
+/// Where a part is left out, its members are of this empty type.
+struct MlpAbsent {};
+
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts = kMlpAllParts>
 struct MlpParams {
   static_assert(kObs > 0 && kH1 > 0 && kH2 > 0 && kAct > 0, "layer sizes must be positive");
+  static_assert((kParts & ~unsigned{kMlpAllParts}) == 0, "unknown MlpParts bit");
   static constexpr int obs_dim = kObs;
   static constexpr int action_dim = kAct;
+  static constexpr bool has_obs_norm = (kParts & kMlpObsNorm) != 0;
+  static constexpr bool has_action_clamp = (kParts & kMlpActionClamp) != 0;
+  template <class T>
+  using Part = std::conditional_t<has_obs_norm, T, MlpAbsent>;
+  template <class T>
+  using ClampPart = std::conditional_t<has_action_clamp, T, MlpAbsent>;
   Activation activation;
   // Observation normalisation as in training: x = clamp((obs - mean) * inv_std, -clip, clip)
   // (SB3 VecNormalize, rsl_rl EmpiricalNormalization; identity: mean 0, inv_std 1, clip large).
-  real obs_mean[kObs];
-  real obs_inv_std[kObs];
-  real obs_clip;
+  // Without kMlpObsNorm the observation is the first layer's input as it is (python/kestrel/
+  // export.py leaves the part out for a network trained without normalisation: 108 B of a
+  // 13-input network's flash, and its loop).
+  Part<real[kObs]> obs_mean;
+  Part<real[kObs]> obs_inv_std;
+  Part<real> obs_clip;
   DenseLayer<kObs, kH1> hidden1;
   DenseLayer<kH1, kH2> hidden2;
   DenseLayer<kH2, kAct> output;  // the Gaussian's mean (deterministic action)
   // Action mapping: action = offset + scale * clamp(squash(y), low, high) (the learner's squash or
-  // clip to the action space, then the task's scaling into controller units).
-  real action_low[kAct];
-  real action_high[kAct];
+  // clip to the action space, then the task's scaling into controller units). Without
+  // kMlpActionClamp: offset + scale * squash(y) (export.py leaves the clamp out where it cannot
+  // act: a tanh squash into [-1, 1] within [low, high]).
+  ClampPart<real[kAct]> action_low;
+  ClampPart<real[kAct]> action_high;
   real action_scale[kAct];
   real action_offset[kAct];
   Squash output_squash;  // last, so that a zero-initialised (static) network has none
@@ -198,13 +221,16 @@ __attribute__((always_inline)) inline void dense_portable(const real* w, const r
 //    S[m]))); VFMA is the fused one and is never used here. So one VMLA gives exactly the bits of
 //    `acc += w * x` compiled under -ffp-contract=off (a VMUL, then a VADD), in one instruction
 //    instead of two. GCC emits VMLA only when contracting, hence the asm.
-//  - VLDM loads up to 12 consecutive floats in one instruction, where GCC emits one VLDR each.
-// Per block of 12 inputs: x in s4-s15 (one VLDM), then for each row its 12 weights in s16-s27 (one
-// VLDM) and 12 VMLAs into the row's accumulator (s0-s3); then blocks of 4 and single inputs for
-// the rest of `in`. 55 instructions per 48 multiply-adds, against 16 per 4 in the compiled loop.
+//  - VLDM loads several consecutive floats in one instruction, where GCC emits one VLDR each.
+// Per block of 4 inputs: x in s4-s7 (one VLDM), then for each row its 4 weights in s8-s11 (one
+// VLDM) and 4 VMLAs into the row's accumulator (s0-s3); then single inputs for the rest of `in`.
+// 23 instructions per 16 multiply-adds, against 16 per 4 in the compiled loop. Only caller-saved
+// registers (s0-s15), so nothing is pushed. Blocks of 12 inputs (s4-s15 and s16-s27) ran 55 per
+// 48, 1,380 fewer instructions per 64-64 ELU inference on the M4F, but took 256 B more flash:
+// the 22 KB goal of a 64-64 float32 policy (issue 11) decided for the smaller loop.
 // Rows are contiguous (weight[out][in]), so a group's last row pointer ends on the next group's
 // first row.
-// Out of line (noinline): the three layers share one copy of it (~0.4 KB of code, against three
+// Out of line (noinline): the three layers share one copy of it (~0.2 KB of code, against three
 // inlined copies), for two extra instructions per layer.
 __attribute__((noinline)) inline void dense_vfp(const real* w, const real* b, int in, int groups, const real* x,
                                                 real* y) {
@@ -219,89 +245,30 @@ __attribute__((noinline)) inline void dense_vfp(const real* w, const real* b, in
       "add.w %[r3], %[r2], %[in], lsl #2\n\t"
       "vldmia %[b]!, {s0-s3}\n\t"
       // n counts the inputs left minus the block size: each block loop ends on subs + branch.
-      "subs %[n], %[in], #12\n\t"
-      "blt 2f\n"
-      "1:\n\t"
-      "vldmia %[x]!, {s4-s15}\n\t"
-      "vldmia %[r0]!, {s16-s27}\n\t"
-      "vmla.f32 s0, s16, s4\n\t"
-      "vmla.f32 s0, s17, s5\n\t"
-      "vmla.f32 s0, s18, s6\n\t"
-      "vmla.f32 s0, s19, s7\n\t"
-      "vmla.f32 s0, s20, s8\n\t"
-      "vmla.f32 s0, s21, s9\n\t"
-      "vmla.f32 s0, s22, s10\n\t"
-      "vmla.f32 s0, s23, s11\n\t"
-      "vmla.f32 s0, s24, s12\n\t"
-      "vmla.f32 s0, s25, s13\n\t"
-      "vmla.f32 s0, s26, s14\n\t"
-      "vmla.f32 s0, s27, s15\n\t"
-      "vldmia %[r1]!, {s16-s27}\n\t"
-      "vmla.f32 s1, s16, s4\n\t"
-      "vmla.f32 s1, s17, s5\n\t"
-      "vmla.f32 s1, s18, s6\n\t"
-      "vmla.f32 s1, s19, s7\n\t"
-      "vmla.f32 s1, s20, s8\n\t"
-      "vmla.f32 s1, s21, s9\n\t"
-      "vmla.f32 s1, s22, s10\n\t"
-      "vmla.f32 s1, s23, s11\n\t"
-      "vmla.f32 s1, s24, s12\n\t"
-      "vmla.f32 s1, s25, s13\n\t"
-      "vmla.f32 s1, s26, s14\n\t"
-      "vmla.f32 s1, s27, s15\n\t"
-      "vldmia %[r2]!, {s16-s27}\n\t"
-      "vmla.f32 s2, s16, s4\n\t"
-      "vmla.f32 s2, s17, s5\n\t"
-      "vmla.f32 s2, s18, s6\n\t"
-      "vmla.f32 s2, s19, s7\n\t"
-      "vmla.f32 s2, s20, s8\n\t"
-      "vmla.f32 s2, s21, s9\n\t"
-      "vmla.f32 s2, s22, s10\n\t"
-      "vmla.f32 s2, s23, s11\n\t"
-      "vmla.f32 s2, s24, s12\n\t"
-      "vmla.f32 s2, s25, s13\n\t"
-      "vmla.f32 s2, s26, s14\n\t"
-      "vmla.f32 s2, s27, s15\n\t"
-      "vldmia %[r3]!, {s16-s27}\n\t"
-      "vmla.f32 s3, s16, s4\n\t"
-      "vmla.f32 s3, s17, s5\n\t"
-      "vmla.f32 s3, s18, s6\n\t"
-      "vmla.f32 s3, s19, s7\n\t"
-      "vmla.f32 s3, s20, s8\n\t"
-      "vmla.f32 s3, s21, s9\n\t"
-      "vmla.f32 s3, s22, s10\n\t"
-      "vmla.f32 s3, s23, s11\n\t"
-      "vmla.f32 s3, s24, s12\n\t"
-      "vmla.f32 s3, s25, s13\n\t"
-      "vmla.f32 s3, s26, s14\n\t"
-      "vmla.f32 s3, s27, s15\n\t"
-      "subs %[n], %[n], #12\n\t"
-      "bge 1b\n"
-      "2:\n\t"
-      "adds %[n], %[n], #8\n\t"  // inputs left - 4
+      "subs %[n], %[in], #4\n\t"
       "blt 4f\n"
       "3:\n\t"
       "vldmia %[x]!, {s4-s7}\n\t"
-      "vldmia %[r0]!, {s16-s19}\n\t"
-      "vmla.f32 s0, s16, s4\n\t"
-      "vmla.f32 s0, s17, s5\n\t"
-      "vmla.f32 s0, s18, s6\n\t"
-      "vmla.f32 s0, s19, s7\n\t"
-      "vldmia %[r1]!, {s16-s19}\n\t"
-      "vmla.f32 s1, s16, s4\n\t"
-      "vmla.f32 s1, s17, s5\n\t"
-      "vmla.f32 s1, s18, s6\n\t"
-      "vmla.f32 s1, s19, s7\n\t"
-      "vldmia %[r2]!, {s16-s19}\n\t"
-      "vmla.f32 s2, s16, s4\n\t"
-      "vmla.f32 s2, s17, s5\n\t"
-      "vmla.f32 s2, s18, s6\n\t"
-      "vmla.f32 s2, s19, s7\n\t"
-      "vldmia %[r3]!, {s16-s19}\n\t"
-      "vmla.f32 s3, s16, s4\n\t"
-      "vmla.f32 s3, s17, s5\n\t"
-      "vmla.f32 s3, s18, s6\n\t"
-      "vmla.f32 s3, s19, s7\n\t"
+      "vldmia %[r0]!, {s8-s11}\n\t"
+      "vmla.f32 s0, s8, s4\n\t"
+      "vmla.f32 s0, s9, s5\n\t"
+      "vmla.f32 s0, s10, s6\n\t"
+      "vmla.f32 s0, s11, s7\n\t"
+      "vldmia %[r1]!, {s8-s11}\n\t"
+      "vmla.f32 s1, s8, s4\n\t"
+      "vmla.f32 s1, s9, s5\n\t"
+      "vmla.f32 s1, s10, s6\n\t"
+      "vmla.f32 s1, s11, s7\n\t"
+      "vldmia %[r2]!, {s8-s11}\n\t"
+      "vmla.f32 s2, s8, s4\n\t"
+      "vmla.f32 s2, s9, s5\n\t"
+      "vmla.f32 s2, s10, s6\n\t"
+      "vmla.f32 s2, s11, s7\n\t"
+      "vldmia %[r3]!, {s8-s11}\n\t"
+      "vmla.f32 s3, s8, s4\n\t"
+      "vmla.f32 s3, s9, s5\n\t"
+      "vmla.f32 s3, s10, s6\n\t"
+      "vmla.f32 s3, s11, s7\n\t"
       "subs %[n], %[n], #4\n\t"
       "bge 3b\n"
       "4:\n\t"
@@ -309,14 +276,14 @@ __attribute__((noinline)) inline void dense_vfp(const real* w, const real* b, in
       "beq 6f\n"
       "5:\n\t"
       "vldmia %[x]!, {s4}\n\t"
-      "vldmia %[r0]!, {s16}\n\t"
-      "vldmia %[r1]!, {s17}\n\t"
-      "vldmia %[r2]!, {s18}\n\t"
-      "vldmia %[r3]!, {s19}\n\t"
-      "vmla.f32 s0, s16, s4\n\t"
-      "vmla.f32 s1, s17, s4\n\t"
-      "vmla.f32 s2, s18, s4\n\t"
-      "vmla.f32 s3, s19, s4\n\t"
+      "vldmia %[r0]!, {s8}\n\t"
+      "vldmia %[r1]!, {s9}\n\t"
+      "vldmia %[r2]!, {s10}\n\t"
+      "vldmia %[r3]!, {s11}\n\t"
+      "vmla.f32 s0, s8, s4\n\t"
+      "vmla.f32 s1, s9, s4\n\t"
+      "vmla.f32 s2, s10, s4\n\t"
+      "vmla.f32 s3, s11, s4\n\t"
       "subs %[n], %[n], #1\n\t"
       "bne 5b\n"
       "6:\n\t"
@@ -328,8 +295,7 @@ __attribute__((noinline)) inline void dense_vfp(const real* w, const real* b, in
       : [r0] "+r"(w), [r1] "=&r"(r1), [r2] "=&r"(r2), [r3] "=&r"(r3), [n] "=&r"(n), [x] "+r"(x), [b] "+r"(b),
         [y] "+r"(y), [groups] "+r"(groups)
       : [in] "r"(in)
-      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15",
-        "s16", "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
+      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "cc", "memory");
 }
 #endif
 
@@ -361,20 +327,25 @@ constexpr bool all_finite_c(const real* v, int n) {
 }
 }  // namespace detail
 
-/// Every number finite, inv_std >= 0, obs_clip > 0, low <= high. invalid_argument otherwise.
+/// Every number finite, inv_std >= 0, obs_clip > 0, low <= high (of the parts the network has), and
+/// a tanh squash where the clamp is left out. invalid_argument otherwise.
 /// constexpr: a network generated into flash (python/kestrel/export.py) is checked by a
 /// static_assert when it is compiled; weights filled at run time are checked by calling it.
-template <int kObs, int kH1, int kH2, int kAct>
-[[nodiscard]] constexpr Status validate_mlp(const MlpParams<kObs, kH1, kH2, kAct>& p) {
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts>
+[[nodiscard]] constexpr Status validate_mlp(const MlpParams<kObs, kH1, kH2, kAct, kParts>& p) {
   using detail::all_finite_c;
   using detail::finite_c;
+  using P = MlpParams<kObs, kH1, kH2, kAct, kParts>;
   if (p.activation != Activation::tanh && p.activation != Activation::elu && p.activation != Activation::relu)
     return Status::invalid_argument;
   if (p.output_squash != Squash::none && p.output_squash != Squash::tanh) return Status::invalid_argument;
-  if (!all_finite_c(p.obs_mean, kObs) || !all_finite_c(p.obs_inv_std, kObs) || !(p.obs_clip > 0) || !finite_c(p.obs_clip))
-    return Status::invalid_argument;
-  for (int i = 0; i < kObs; ++i)
-    if (p.obs_inv_std[i] < 0) return Status::invalid_argument;
+  if constexpr (P::has_obs_norm) {
+    if (!all_finite_c(p.obs_mean, kObs) || !all_finite_c(p.obs_inv_std, kObs) || !(p.obs_clip > 0) ||
+        !finite_c(p.obs_clip))
+      return Status::invalid_argument;
+    for (int i = 0; i < kObs; ++i)
+      if (p.obs_inv_std[i] < 0) return Status::invalid_argument;
+  }
   for (int o = 0; o < kH1; ++o)
     if (!all_finite_c(p.hidden1.weight[o], kObs)) return Status::invalid_argument;
   for (int o = 0; o < kH2; ++o)
@@ -383,11 +354,43 @@ template <int kObs, int kH1, int kH2, int kAct>
     if (!all_finite_c(p.output.weight[o], kH2)) return Status::invalid_argument;
   if (!all_finite_c(p.hidden1.bias, kH1) || !all_finite_c(p.hidden2.bias, kH2) || !all_finite_c(p.output.bias, kAct))
     return Status::invalid_argument;
-  for (int i = 0; i < kAct; ++i)
-    if (!finite_c(p.action_low[i]) || !finite_c(p.action_high[i]) || !(p.action_low[i] <= p.action_high[i]) ||
-        !finite_c(p.action_scale[i]) || !finite_c(p.action_offset[i]))
-      return Status::invalid_argument;
+  for (int i = 0; i < kAct; ++i) {
+    if (!finite_c(p.action_scale[i]) || !finite_c(p.action_offset[i])) return Status::invalid_argument;
+    if constexpr (P::has_action_clamp) {
+      if (!finite_c(p.action_low[i]) || !finite_c(p.action_high[i]) || !(p.action_low[i] <= p.action_high[i]))
+        return Status::invalid_argument;
+    } else if (p.output_squash != Squash::tanh) {
+      return Status::invalid_argument;  // an unsquashed output needs its clamp: it is unbounded
+    }
+  }
   return Status::ok;
+}
+
+/// The largest |action[i]| the network can output: |offset| + |scale| x the bound of the squashed,
+/// clamped output (its clamp's bounds, or 1 for tanh; unbounded, +inf, without either). constexpr:
+/// a firmware that clips the action to a task's range can prove at compile time that the clip
+/// cannot act (platform/firmware/policy_loop.cpp).
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts>
+[[nodiscard]] constexpr real max_abs_action(const MlpParams<kObs, kH1, kH2, kAct, kParts>& p, int i) {
+  using P = MlpParams<kObs, kH1, kH2, kAct, kParts>;
+  real bound = std::numeric_limits<real>::infinity();
+  if (p.output_squash == Squash::tanh) bound = 1;
+  if constexpr (P::has_action_clamp) {
+    const real lo = p.action_low[i] < 0 ? -p.action_low[i] : p.action_low[i];
+    const real hi = p.action_high[i] < 0 ? -p.action_high[i] : p.action_high[i];
+    const real m = lo > hi ? lo : hi;
+    if (m < bound) bound = m;
+  }
+  const real s = p.action_scale[i] < 0 ? -p.action_scale[i] : p.action_scale[i];
+  const real o = p.action_offset[i] < 0 ? -p.action_offset[i] : p.action_offset[i];
+  return o + s * bound;
+}
+/// Every action within [-bound, bound] whatever the observation (max_abs_action).
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts>
+[[nodiscard]] constexpr bool actions_within(const MlpParams<kObs, kH1, kH2, kAct, kParts>& p, real bound) {
+  for (int i = 0; i < kAct; ++i)
+    if (!(max_abs_action(p, i) <= bound)) return false;
+  return true;
 }
 
 /// A network of any size as plain pointers and dimensions: what bindings and tools evaluate (the
@@ -396,18 +399,33 @@ template <int kObs, int kH1, int kH2, int kAct>
 struct MlpView {
   int obs_dim, h1, h2, action_dim;
   Activation activation;
-  const real *obs_mean, *obs_inv_std;
+  const real *obs_mean, *obs_inv_std;  // both null: no normalisation (kMlpObsNorm left out)
   real obs_clip;
   const real *w1, *b1, *w2, *b2, *w3, *b3;  // row-major weight[out][in]
-  const real *action_low, *action_high, *action_scale, *action_offset;
+  const real *action_low, *action_high, *action_scale, *action_offset;  // low, high null: no clamp
   Squash output_squash;
 };
 
-template <int kObs, int kH1, int kH2, int kAct>
-inline MlpView view_of(const MlpParams<kObs, kH1, kH2, kAct>& p) {
-  return MlpView{kObs, kH1, kH2, kAct, p.activation, p.obs_mean, p.obs_inv_std, p.obs_clip,
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts>
+inline MlpView view_of(const MlpParams<kObs, kH1, kH2, kAct, kParts>& p) {
+  using P = MlpParams<kObs, kH1, kH2, kAct, kParts>;
+  const real* mean = nullptr;
+  const real* inv_std = nullptr;
+  real clip = 0;
+  const real* low = nullptr;
+  const real* high = nullptr;
+  if constexpr (P::has_obs_norm) {
+    mean = p.obs_mean;
+    inv_std = p.obs_inv_std;
+    clip = p.obs_clip;
+  }
+  if constexpr (P::has_action_clamp) {
+    low = p.action_low;
+    high = p.action_high;
+  }
+  return MlpView{kObs, kH1, kH2, kAct, p.activation, mean, inv_std, clip,
                  &p.hidden1.weight[0][0], p.hidden1.bias, &p.hidden2.weight[0][0], p.hidden2.bias,
-                 &p.output.weight[0][0], p.output.bias, p.action_low, p.action_high, p.action_scale,
+                 &p.output.weight[0][0], p.output.bias, low, high, p.action_scale,
                  p.action_offset, p.output_squash};
 }
 
@@ -417,13 +435,17 @@ inline MlpView view_of(const MlpParams<kObs, kH1, kH2, kAct>& p) {
 /// that validate_mlp refuses). No heap.
 __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, const real* obs, real* action,
                                                               real* scratch) {
-  real* x = scratch;
-  real* a1 = x + v.obs_dim;
+  real* xn = scratch;
+  real* a1 = xn + v.obs_dim;
   real* a2 = a1 + v.h1;
   real* y = a2 + v.h2;
-  for (int i = 0; i < v.obs_dim; ++i) {
+  const real* x = obs;
+  for (int i = 0; i < v.obs_dim; ++i)
     if (!is_finite(obs[i])) return Status::non_finite_input;
-    x[i] = clamp((obs[i] - v.obs_mean[i]) * v.obs_inv_std[i], -v.obs_clip, v.obs_clip);
+  if (v.obs_mean != nullptr) {
+    for (int i = 0; i < v.obs_dim; ++i)
+      xn[i] = clamp((obs[i] - v.obs_mean[i]) * v.obs_inv_std[i], -v.obs_clip, v.obs_clip);
+    x = xn;
   }
   detail::dense(v.w1, v.b1, v.obs_dim, v.h1, x, a1);
   detail::activate_all(v.activation, a1, v.h1);
@@ -432,8 +454,9 @@ __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, 
   detail::dense(v.w3, v.b3, v.h2, v.action_dim, a2, y);
   if (!all_finite(y, v.action_dim)) return Status::non_finite_input;
   if (v.output_squash == Squash::tanh) detail::squash_tanh_all(v.activation, y, v.action_dim);
-  for (int i = 0; i < v.action_dim; ++i)
-    action[i] = v.action_offset[i] + v.action_scale[i] * clamp(y[i], v.action_low[i], v.action_high[i]);
+  if (v.action_low != nullptr)
+    for (int i = 0; i < v.action_dim; ++i) y[i] = clamp(y[i], v.action_low[i], v.action_high[i]);
+  for (int i = 0; i < v.action_dim; ++i) action[i] = v.action_offset[i] + v.action_scale[i] * y[i];
   return Status::ok;
 }
 
@@ -442,8 +465,8 @@ __attribute__((always_inline)) inline Status mlp_forward_view(const MlpView& v, 
 /// on the stack (kObs + kH1 + kH2 + kAct reals).
 // Inlined into its caller: with a constexpr network (the exported header) the activation and
 // squash kinds are constants there, so only their code is linked.
-template <int kObs, int kH1, int kH2, int kAct>
-[[nodiscard]] __attribute__((always_inline)) inline Status mlp_forward(const MlpParams<kObs, kH1, kH2, kAct>& p,
+template <int kObs, int kH1, int kH2, int kAct, unsigned kParts>
+[[nodiscard]] __attribute__((always_inline)) inline Status mlp_forward(const MlpParams<kObs, kH1, kH2, kAct, kParts>& p,
                                                                        const real* obs, real* action) {
   real scratch[kObs + kH1 + kH2 + kAct];
   return mlp_forward_view(view_of(p), obs, action, scratch);
