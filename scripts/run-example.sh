@@ -15,10 +15,12 @@ jobs=$(nproc 2>/dev/null || echo 2)
 
 echo "== building (host)"
 cmake --preset host >/dev/null
-cmake --build --preset host --target kestrel_firmware_host kestrel_firmware_policy_host kestrel -j "$jobs"
+# kestrel_package: also every library the install rules copy, so `cmake --install build/host`
+# (and build/cortex-m4f) works on the trees this script leaves (docs/packaging.md).
+cmake --build --preset host --target kestrel_firmware_host kestrel_firmware_policy_host kestrel kestrel_package -j "$jobs"
 echo "== building (Cortex-M4F)"
 cmake --preset cortex-m4f >/dev/null
-cmake --build --preset cortex-m4f --target kestrel_firmware kestrel_firmware_policy -j "$jobs"
+cmake --build --preset cortex-m4f --target kestrel_firmware kestrel_firmware_policy kestrel_package -j "$jobs"
 
 echo
 echo "== host"
