@@ -3,6 +3,8 @@
 // caller's storage (placement new into kestrel_storage, no heap).
 #include "kestrel/kestrel.h"
 
+#include <cmath>
+#include <cstddef>
 #include <new>
 
 #include "kestrel/allocation/airframe.hpp"
@@ -28,6 +30,7 @@ struct CapiStack {
   robots::MultirotorState st;   // controller, allocator and motor state
   robots::MultirotorOutput out; // last controller wrench and thrust setpoints
   al::MotorHealth health;       // what the allocation model was last built with
+  std::uint32_t latched;        // latched faults (KESTREL_LATCHED_FAULTS bits): kestrel_faults()
 };
 static_assert(sizeof(CapiStack) <= KESTREL_STORAGE_BYTES, "raise KESTREL_STORAGE_BYTES in kestrel.h");
 static_assert(alignof(CapiStack) <= alignof(kestrel_storage), "kestrel_storage is under-aligned");
@@ -40,6 +43,25 @@ static_assert(KESTREL_FAULT_NON_FINITE_OUTPUT == kFaultNonFiniteOutput && KESTRE
                   KESTREL_FAULT_SATURATED == kFaultSaturated,
               "fault bits are kestrel::Fault values");
 static_assert(KESTREL_MAX_MOTORS == al::kMaxRotors, "KESTREL_MAX_MOTORS is kMaxRotors");
+static_assert(KESTREL_FAULT_COMMAND_OUT_OF_RANGE == kFaultCommandOutOfRange && KESTREL_FAULT_SINGULAR == kFaultSingular &&
+                  KESTREL_FAULT_NON_FINITE_COMMAND == kFaultNonFiniteCommand &&
+                  KESTREL_FAULT_NON_FINITE_STATE == kFaultNonFiniteState,
+              "fault bits are kestrel::Fault values");
+// conditions (uint16_t) took the padding after saturated_mask: the struct's size and every
+// earlier field's offset are those of the previous header (firmware built against it still works).
+static_assert(sizeof(kestrel_output) == 4 + 3 * 4 * KESTREL_MAX_MOTORS + 6 * 4 + 4 + 2 + 2, "kestrel_output layout");
+static_assert(offsetof(kestrel_output, conditions) == offsetof(kestrel_output, saturated_mask) + 2,
+              "conditions fills the old padding");
+static_assert(static_cast<int>(KESTREL_CLIPPED) > static_cast<int>(Status::non_finite_output),
+              "C-only status values follow kestrel::Status's");
+static_assert(static_cast<float>(KESTREL_SETPOINT_MAX) == 10.0f && static_cast<float>(KESTREL_SETPOINT_MIN) == -10.0f,
+              "the setpoint range is LeeParams' default action range");
+
+constexpr std::uint32_t kLatched = KESTREL_LATCHED_FAULTS;
+constexpr float kMaxRotorPositionM = 100.0f;  // |rotor position component| (m)
+constexpr float kMaxThrustN = 1e6f;           // |rotor thrust limit| (N)
+constexpr float kMaxTimeConstantS = 10.0f;    // motor time constants (s)
+constexpr real kIndependence = 1e-4_r;        // controllability check, see build_stack
 static_assert(static_cast<int>(KESTREL_NOT_CONVERGED) == static_cast<int>(Status::not_converged) &&
                   static_cast<int>(KESTREL_NON_FINITE_OUTPUT) == static_cast<int>(Status::non_finite_output),
               "status values");
@@ -87,6 +109,151 @@ __attribute__((noinline, cold)) void repair_outputs(CapiStack* s, kestrel_output
   s->st.allocator.faults.raise(kFaultNonFiniteOutput);
 }
 
+
+// A refused init leaves the storage unusable (kestrel.h): only the magic word is cleared.
+void unusable(kestrel_storage* storage) {
+  if (storage != nullptr) std::launder(reinterpret_cast<CapiStack*>(storage->u.bytes))->magic = 0;
+}
+
+bool in_range(float v, float lo, float hi) { return v >= lo && v <= hi; }  // false for NaN
+bool in_range3(const float* v, float lo, float hi) {
+  return in_range(v[0], lo, hi) && in_range(v[1], lo, hi) && in_range(v[2], lo, hi);
+}
+
+// kestrel_params' ranges (kestrel.h) beyond what validate_lee_params checks: gains >= 0, inertia > 0.
+bool params_ok(const kestrel_params& p) {
+  const float kmax = static_cast<float>(kLeeMaxGain);
+  if (!in_range(p.mass_kg, 0.0f, static_cast<float>(kLeeMaxMassKg)) || !(p.mass_kg > 0.0f)) return false;
+  for (int i = 0; i < 3; ++i) {
+    if (!in_range(p.inertia_diag_kgm2[i], 0.0f, static_cast<float>(kLeeMaxInertiaKgm2)) || !(p.inertia_diag_kgm2[i] > 0.0f))
+      return false;
+  }
+  return in_range3(p.k_pos, 0.0f, kmax) && in_range3(p.k_vel, 0.0f, kmax) && in_range3(p.k_rot, 0.0f, kmax) &&
+         in_range3(p.k_angvel, 0.0f, kmax) && in_range(p.max_yaw_rate_radps, 0.0f, 1e6f) &&
+         in_range(p.yaw_headroom, 0.0f, 1e6f);
+}
+
+// kestrel_airframe's ranges (kestrel.h).
+bool airframe_ok(const kestrel_airframe& a, bool motors_on) {
+  if (a.num_rotors < 1 || a.num_rotors > KESTREL_MAX_MOTORS) return false;
+  if (!in_range(a.torque_to_thrust_m, 0.0f, 1.0f) || !in_range(a.thrust_constant, 0.0f, 1.0f)) return false;
+  if (motors_on && (!in_range(a.time_constant_up_s, 0.0f, kMaxTimeConstantS) || !(a.time_constant_up_s > 0.0f) ||
+                    !in_range(a.time_constant_down_s, 0.0f, kMaxTimeConstantS) || !(a.time_constant_down_s > 0.0f)))
+    return false;
+  for (int i = 0; i < a.num_rotors; ++i) {
+    const kestrel_rotor& r = a.rotor[i];
+    if (!in_range3(r.position_b_m, -kMaxRotorPositionM, kMaxRotorPositionM)) return false;
+    // Components bounded so the squared norm neither overflows nor underflows to zero.
+    if (!in_range3(r.axis_b, -1e6f, 1e6f)) return false;
+    const float n2 = r.axis_b[0] * r.axis_b[0] + r.axis_b[1] * r.axis_b[1] + r.axis_b[2] * r.axis_b[2];
+    if (!(n2 >= 1e-12f)) return false;
+    if (r.direction != 1 && r.direction != -1) return false;
+    if (!in_range(r.thrust_min_N, -kMaxThrustN, kMaxThrustN) || !in_range(r.thrust_max_N, -kMaxThrustN, kMaxThrustN) ||
+        !(r.thrust_min_N < r.thrust_max_N))
+      return false;
+    // The rotor-speed model takes sqrt(thrust / kf): no negative thrust (motor_model.hpp, quirk 9).
+    if (motors_on && a.thrust_constant > 0.0f && r.thrust_min_N < 0.0f) return false;
+  }
+  return true;
+}
+
+// Builds the stack in the storage from checked-here parameters, an airframe spec (per-rotor limits
+// lo/hi replacing the spec's scalar ones where given) and a motor model. Every refusal leaves the
+// storage unusable (magic 0).
+kestrel_status build_stack(kestrel_storage* storage, const kestrel_params* p, const al::AirframeSpec& spec,
+                           const real* lo, const real* hi, const al::MotorModelConfig& motors) {
+  if (storage == nullptr) return KESTREL_INVALID_ARGUMENT;
+  if (p == nullptr || !params_ok(*p)) {
+    unusable(storage);
+    return KESTREL_INVALID_ARGUMENT;
+  }
+  CapiStack* s = new (storage->u.bytes) CapiStack();  // value-initialised; magic 0 until the end
+
+  LeeParams& lee = s->mr.ctrl.lee;
+  lee = lee_params_base_quadrotor();
+  lee.mass_kg = static_cast<real>(p->mass_kg);
+  lee.inertia_b = Mat3::Zero();
+  for (int i = 0; i < 3; ++i) lee.inertia_b(i, i) = static_cast<real>(p->inertia_diag_kgm2[i]);
+  LeeGains g;
+  g.k_pos = vec3(p->k_pos);
+  g.k_vel = vec3(p->k_vel);
+  g.k_rot = vec3(p->k_rot);
+  g.k_angvel = vec3(p->k_angvel);
+  lee.gain_ranges.min = g;  // min = max fixes the gains
+  lee.gain_ranges.max = g;
+  lee.randomize_gains = false;
+  lee.max_yaw_rate_radps = static_cast<real>(p->max_yaw_rate_radps);
+  if (const Status st = validate_lee_params(lee); st != Status::ok) return to_c(st);
+  controller_reset(ControllerKind::lee_position, s->mr.ctrl, s->st.ctrl);
+
+  s->mr.desat.yaw_headroom = static_cast<real>(p->yaw_headroom);
+  if (const Status st = al::make_airframe(spec, s->mr.airframe); st != Status::ok) return to_c(st);
+  al::Airframe& af = s->mr.airframe;
+  const int n = af.num_rotors;
+  if (lo != nullptr && hi != nullptr) {
+    for (int i = 0; i < n; ++i) {
+      af.thrust_min_N[i] = lo[i];
+      af.thrust_max_N[i] = hi[i];
+    }
+  }
+  // Flat multirotors have rank 4 (no lateral force): Status::singular is expected and harmless.
+  const Status am = al::build_allocation_model(af, s->health, s->mr.allocation);
+  if (am != Status::ok && am != Status::singular) return to_c(am);
+  // Controllability: the collective thrust fz and the three torques must be producible
+  // independently (lateral forces may come along, as on a quad with tilted rotors): the rows
+  // fz, tx, ty, tz of A must be linearly independent. Checked scale-free on their correlation
+  // matrix (Gram matrix with unit diagonal) by Cholesky: a pivot below kIndependence means a row
+  // is (nearly) a combination of the others, e.g. every rotor on one line (no torque about it) or
+  // a flat frame with torque_to_thrust_m 0 (no yaw torque).
+  {
+    real gram[4][4], chol[4][4] = {};
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) {
+        real dot = 0;
+        for (int i = 0; i < n; ++i) dot += af.effectiveness(2 + a, i) * af.effectiveness(2 + b, i);
+        gram[a][b] = dot;
+      }
+    }
+    for (int a = 0; a < 4; ++a) {
+      if (!(gram[a][a] > 0)) return KESTREL_SINGULAR;
+    }
+    for (int j = 0; j < 4; ++j) {
+      for (int i = j; i < 4; ++i) {
+        real c = gram[i][j] / std::sqrt(gram[i][i] * gram[j][j]);
+        for (int k = 0; k < j; ++k) c -= chol[i][k] * chol[j][k];
+        if (i == j) {
+          if (!(c > kIndependence)) return KESTREL_SINGULAR;
+          chol[j][j] = std::sqrt(c);
+        } else {
+          chol[i][j] = c / chol[j][j];
+        }
+      }
+    }
+  }
+  // Thrust-to-weight >= 1: the largest total thrust along body +z (each rotor at whichever limit
+  // pushes up more) must lift the mass.
+  real fz_max = 0;
+  for (int i = 0; i < n; ++i) {
+    const real az = af.effectiveness(2, i);
+    const real a = az * af.thrust_min_N[i], b = az * af.thrust_max_N[i];
+    fz_max += a > b ? a : b;
+  }
+  if (!(fz_max >= lee.mass_kg * kStandardGravity)) return KESTREL_INSUFFICIENT_THRUST;
+
+  al::reset_allocator(s->st.allocator);
+  s->mr.motors = motors;
+  RngStream rng(1, 0, kPurposeMotors);
+  const real idle[al::kMaxRotors] = {};
+  if (const Status st = al::motor_model_reset(s->mr.motors, s->st.motors, rng, idle); st != Status::ok) return to_c(st);
+  s->mr.use_motor_model = p->use_motor_model != 0;
+  s->mr.controller = ControllerKind::lee_position;  // the default mode; kestrel_step picks per call
+  s->mr.allocator = robots::AllocatorKind::sequential_desaturation;
+  if (const Status st = robots::finish_multirotor_model(s->mr); st != Status::ok) return to_c(st);
+  s->latched = 0;
+  s->magic = kMagic;
+  return KESTREL_OK;
+}
+
 }  // namespace
 
 extern "C" {
@@ -126,49 +293,87 @@ kestrel_status kestrel_default_params(std::int32_t preset, kestrel_params* p) {
 
 kestrel_status kestrel_init(kestrel_storage* storage, std::int32_t preset) {
   kestrel_params p;
-  if (const kestrel_status st = kestrel_default_params(preset, &p); st != KESTREL_OK) return st;
+  if (const kestrel_status st = kestrel_default_params(preset, &p); st != KESTREL_OK) {
+    unusable(storage);
+    return st;
+  }
   return kestrel_init_params(storage, &p);
 }
 
 kestrel_status kestrel_init_params(kestrel_storage* storage, const kestrel_params* p) {
-  if (storage == nullptr || p == nullptr || !supported(p->preset)) return KESTREL_INVALID_ARGUMENT;
-  CapiStack* s = new (storage->u.bytes) CapiStack();  // value-initialised; magic 0 until the end
+  if (p == nullptr || !supported(p->preset)) {
+    unusable(storage);
+    return KESTREL_INVALID_ARGUMENT;
+  }
   const auto preset = static_cast<al::AirframePreset>(p->preset);
+  return build_stack(storage, p, al::airframe_spec(preset), nullptr, nullptr, al::motor_model_preset(preset));
+}
 
-  LeeParams& lee = s->mr.ctrl.lee;
-  lee = lee_params_base_quadrotor();
-  lee.mass_kg = static_cast<real>(p->mass_kg);
-  lee.inertia_b = Mat3::Zero();
-  for (int i = 0; i < 3; ++i) lee.inertia_b(i, i) = static_cast<real>(p->inertia_diag_kgm2[i]);
-  LeeGains g;
-  g.k_pos = vec3(p->k_pos);
-  g.k_vel = vec3(p->k_vel);
-  g.k_rot = vec3(p->k_rot);
-  g.k_angvel = vec3(p->k_angvel);
-  lee.gain_ranges.min = g;  // min = max fixes the gains
-  lee.gain_ranges.max = g;
-  lee.randomize_gains = false;
-  lee.max_yaw_rate_radps = static_cast<real>(p->max_yaw_rate_radps);
-  if (const Status st = validate_lee_params(lee); st != Status::ok) return to_c(st);
-  controller_reset(ControllerKind::lee_position, s->mr.ctrl, s->st.ctrl);
-
-  if (!is_finite(static_cast<real>(p->yaw_headroom)) || p->yaw_headroom < 0) return KESTREL_INVALID_ARGUMENT;
-  s->mr.desat.yaw_headroom = static_cast<real>(p->yaw_headroom);
-  if (const Status st = al::make_airframe(al::airframe_spec(preset), s->mr.airframe); st != Status::ok) return to_c(st);
-  // Flat multirotors have rank 4 (no lateral force): Status::singular is expected and harmless.
-  const Status am = al::build_allocation_model(s->mr.airframe, s->health, s->mr.allocation);
-  if (am != Status::ok && am != Status::singular) return to_c(am);
-  al::reset_allocator(s->st.allocator);
-  s->mr.motors = al::motor_model_preset(preset);
-  RngStream rng(1, 0, kPurposeMotors);
-  const real idle[al::kMaxRotors] = {};
-  if (const Status st = al::motor_model_reset(s->mr.motors, s->st.motors, rng, idle); st != Status::ok) return to_c(st);
-  s->mr.use_motor_model = p->use_motor_model != 0;
-  s->mr.controller = ControllerKind::lee_position;  // the default mode; kestrel_step picks per call
-  s->mr.allocator = robots::AllocatorKind::sequential_desaturation;
-  if (const Status st = robots::finish_multirotor_model(s->mr); st != Status::ok) return to_c(st);
-  s->magic = kMagic;
+kestrel_status kestrel_airframe_from_preset(std::int32_t preset, kestrel_airframe* a) {
+  if (a == nullptr || !supported(preset)) return KESTREL_INVALID_ARGUMENT;
+  const al::AirframeSpec& spec = al::airframe_spec(static_cast<al::AirframePreset>(preset));
+  const al::MotorModelConfig& m = al::motor_model_preset(static_cast<al::AirframePreset>(preset));
+  *a = kestrel_airframe();
+  a->num_rotors = spec.num_rotors;
+  for (int i = 0; i < spec.num_rotors; ++i) {
+    kestrel_rotor& r = a->rotor[i];
+    for (int k = 0; k < 3; ++k) {
+      r.position_b_m[k] = static_cast<float>(spec.rotors[i].position_b_m[k]);
+      r.axis_b[k] = static_cast<float>(spec.rotors[i].axis_b[k]);
+    }
+    r.direction = spec.direction[i];
+    r.thrust_min_N = static_cast<float>(spec.thrust_min_N);
+    r.thrust_max_N = static_cast<float>(spec.thrust_max_N);
+  }
+  a->torque_to_thrust_m = static_cast<float>(spec.thrust_to_torque_m);
+  // The nominal constants (min = max for the hexarotor and the X500: the same values).
+  a->thrust_constant = m.use_rps ? static_cast<float>((m.thrust_constant_min + m.thrust_constant_max) / 2) : 0.0f;
+  a->time_constant_up_s = static_cast<float>((m.time_constant_increasing_min_s + m.time_constant_increasing_max_s) / 2);
+  a->time_constant_down_s = static_cast<float>((m.time_constant_decreasing_min_s + m.time_constant_decreasing_max_s) / 2);
   return KESTREL_OK;
+}
+
+kestrel_status kestrel_init_airframe(kestrel_storage* storage, const kestrel_airframe* a, const kestrel_params* p) {
+  const bool motors_on = p != nullptr && p->use_motor_model != 0;
+  if (p == nullptr || a == nullptr || !airframe_ok(*a, motors_on)) {
+    unusable(storage);
+    return KESTREL_INVALID_ARGUMENT;
+  }
+  const int n = a->num_rotors;
+  // The spec (scalar limits: the envelope of the rotors'; the per-rotor limits go into the built
+  // airframe) and the motor model, as the PX4-class presets build theirs (presets.hpp).
+  al::AirframeSpec spec{};
+  spec.name = "custom";
+  spec.num_rotors = n;
+  spec.source = al::AirframeSource::rotor_geometry;
+  spec.thrust_to_torque_m = static_cast<real>(a->torque_to_thrust_m);
+  spec.mass_kg = static_cast<real>(p->mass_kg);
+  real lo[al::kMaxRotors] = {}, hi[al::kMaxRotors] = {};
+  for (int i = 0; i < n; ++i) {
+    const kestrel_rotor& r = a->rotor[i];
+    for (int k = 0; k < 3; ++k) {
+      spec.rotors[i].position_b_m[k] = static_cast<real>(r.position_b_m[k]);
+      spec.rotors[i].axis_b[k] = static_cast<real>(r.axis_b[k]);
+    }
+    spec.direction[i] = static_cast<std::int8_t>(r.direction);
+    lo[i] = static_cast<real>(r.thrust_min_N);
+    hi[i] = static_cast<real>(r.thrust_max_N);
+    spec.thrust_min_N = i == 0 || lo[i] < spec.thrust_min_N ? lo[i] : spec.thrust_min_N;
+    spec.thrust_max_N = i == 0 || hi[i] > spec.thrust_max_N ? hi[i] : spec.thrust_max_N;
+  }
+  al::MotorModelConfig m = al::presets::motors_from(spec);
+  m.integrator = al::MotorIntegrator::rk4;
+  m.use_discrete_approximation = false;
+  m.max_rate = 100000;
+  // Off: the model is never stepped, but its reset still validates it (sane constants).
+  const real kf = motors_on ? static_cast<real>(a->thrust_constant) : 0;
+  const real up = motors_on ? static_cast<real>(a->time_constant_up_s) : 0.04_r;
+  const real down = motors_on ? static_cast<real>(a->time_constant_down_s) : 0.04_r;
+  m.use_rps = kf > 0;
+  m.thrust_constant_min = m.thrust_constant_max = kf;
+  m.time_constant_increasing_min_s = m.time_constant_increasing_max_s = up;
+  m.time_constant_decreasing_min_s = m.time_constant_decreasing_max_s = down;
+  return build_stack(storage, p, spec, lo, hi, m);
 }
 
 kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, const kestrel_setpoint* sp, float dt_s,
@@ -201,6 +406,12 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
   body.angvel_b = vec3(st->angvel_b);
   const real action[4] = {static_cast<real>(sp->value[0]), static_cast<real>(sp->value[1]),
                           static_cast<real>(sp->value[2]), static_cast<real>(sp->value[3])};
+
+  // The stages' fault flags hold this step's bits only (cleared here; the C API latches its own
+  // mask of faults below, so saturation and the like stay per-step conditions).
+  s->st.ctrl.lee.faults.bits = 0;
+  s->st.allocator.faults.bits = 0;
+  s->st.motors.faults.bits = 0;
 
   // The core chain with the mode's controller; a rejected (non-finite) input still yields the held
   // safe wrench, which is allocated as usual. First non-ok status of the stages.
@@ -242,17 +453,24 @@ kestrel_status kestrel_step(kestrel_storage* storage, const kestrel_state* st, c
     repair_outputs(s, out);
     if (worst == Status::ok) worst = Status::non_finite_output;
   }
+  std::uint32_t cond = s->st.ctrl.lee.faults.bits | s->st.allocator.faults.bits | s->st.motors.faults.bits;
+  if ((s->mr.allocation.dead_mask | s->mr.allocation.weak_mask) != 0) cond |= kFaultMotorFailure;
+  s->latched |= cond & kLatched;
   out->saturated_mask = s->out.allocation.saturated_mask();
-  out->faults = kestrel_faults(storage);
-  return to_c(worst);
+  out->conditions = static_cast<std::uint16_t>(cond);
+  out->faults = s->latched;
+  if (worst != Status::ok) return to_c(worst);
+  // Finite, but not the controller's answer to the setpoint as given: not OK (kestrel.h).
+  if ((cond & kFaultCommandOutOfRange) != 0) return KESTREL_CLIPPED;
+  if ((cond & kFaultSingular) != 0) return KESTREL_SINGULAR;
+  return KESTREL_OK;
 }
 
 uint32_t kestrel_faults(const kestrel_storage* storage) {
   const CapiStack* s = stack_of(storage);
   if (s == nullptr) return 0;
   // The model's kFaultSingular is the rank deficiency of a flat frame, not a fault.
-  return s->st.ctrl.lee.faults.bits | s->st.allocator.faults.bits | s->st.motors.faults.bits |
-         (s->mr.allocation.faults.bits & ~static_cast<std::uint32_t>(kFaultSingular));
+  return s->latched;
 }
 
 void kestrel_clear_faults(kestrel_storage* storage) {
@@ -261,6 +479,7 @@ void kestrel_clear_faults(kestrel_storage* storage) {
   s->st.ctrl.lee.faults.clear();
   s->st.allocator.faults.clear();
   s->st.motors.faults.clear();
+  s->latched = 0;
 }
 
 kestrel_status kestrel_inject_motor_failure(kestrel_storage* storage, std::int32_t motor, float thrust_scale) {
@@ -271,8 +490,23 @@ kestrel_status kestrel_inject_motor_failure(kestrel_storage* storage, std::int32
   const real scale = static_cast<real>(thrust_scale);
   if (const Status st = al::inject_motor_failure(s->st.motors, motor, scale); st != Status::ok) return to_c(st);
   s->health.thrust_scale[motor] = scale;
+  if (scale < 1) s->latched |= kFaultMotorFailure;
   const Status am = al::build_allocation_model(s->mr.airframe, s->health, s->mr.allocation);
   return am == Status::singular ? KESTREL_OK : to_c(am);
+}
+
+float kestrel_command_to_throttle(float command, float thr_mdl_fac) {
+  const float t = command > 0.0f ? (command < 1.0f ? command : 1.0f) : 0.0f;  // NaN -> 0
+  const float k = thr_mdl_fac > 0.0f ? (thr_mdl_fac < 1.0f ? thr_mdl_fac : 1.0f) : 0.0f;
+  if (!(t > 0.0f)) return 0.0f;
+  // Root of k u^2 + (1 - k) u - t = 0 in the form without cancellation (exact u = t at k = 0).
+  const float b = 1.0f - k;
+  const float u = 2.0f * t / (b + std::sqrt(b * b + 4.0f * k * t));
+  return u < 1.0f ? u : 1.0f;
+}
+
+float kestrel_thrust_to_pwm_us(float command, float thr_mdl_fac, float min_us, float max_us) {
+  return min_us + kestrel_command_to_throttle(command, thr_mdl_fac) * (max_us - min_us);
 }
 
 float kestrel_command_to_pwm_us(float command, float min_us, float max_us) {
