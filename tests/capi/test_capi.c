@@ -58,37 +58,12 @@ static void plant_to_state(const plant* b, kestrel_state* s) {
   memcpy(s->angvel_b, b->w, sizeof b->w);
 }
 
-/* One step of the quadrotor plant with the motors' thrusts (N). */
-static void plant_step(plant* b, const float* f, float dt) {
-  static const float rx[4] = {0.13f, -0.13f, -0.13f, 0.13f};
-  static const float ry[4] = {-0.13f, -0.13f, 0.13f, 0.13f};
-  static const float dir[4] = {1.0f, -1.0f, 1.0f, -1.0f};
-  const float m = 0.25f, jx = 0.000845f, jy = 0.000845f, jz = 0.00169f;
-  float fz = 0.0f, tx = 0.0f, ty = 0.0f, tz = 0.0f;
-  float x = b->q[0], y = b->q[1], z = b->q[2], w = b->q[3], n;
-  float ax, ay, az, dwx, dwy, dwz, qx, qy, qz, qw;
+/* The kinematic part of a plant step, after v and w took this step's accelerations: position,
+ * q += dt/2 q (x) (w, 0) normalised, and the ground. */
+static void plant_advance(plant* b, float dt) {
+  float x = b->q[0], y = b->q[1], z = b->q[2], w = b->q[3], n, qx, qy, qz, qw;
   int i;
-  for (i = 0; i < 4; ++i) {
-    fz += f[i];
-    tx += ry[i] * f[i];
-    ty += -rx[i] * f[i];
-    tz += -dir[i] * 0.01f * f[i];
-  }
-  /* World acceleration: R e_z fz / m + g (third column of R). */
-  ax = 2.0f * (x * z + w * y) * fz / m;
-  ay = 2.0f * (y * z - w * x) * fz / m;
-  az = (1.0f - 2.0f * (x * x + y * y)) * fz / m - 9.81f;
-  dwx = (tx - (jz - jy) * b->w[1] * b->w[2]) / jx;
-  dwy = (ty - (jx - jz) * b->w[2] * b->w[0]) / jy;
-  dwz = (tz - (jy - jx) * b->w[0] * b->w[1]) / jz;
-  b->v[0] += ax * dt;
-  b->v[1] += ay * dt;
-  b->v[2] += az * dt;
-  b->w[0] += dwx * dt;
-  b->w[1] += dwy * dt;
-  b->w[2] += dwz * dt;
   for (i = 0; i < 3; ++i) b->p[i] += b->v[i] * dt;
-  /* q += dt/2 q (x) (w, 0), then normalise. */
   qx = 0.5f * dt * (w * b->w[0] + y * b->w[2] - z * b->w[1]);
   qy = 0.5f * dt * (w * b->w[1] + z * b->w[0] - x * b->w[2]);
   qz = 0.5f * dt * (w * b->w[2] + x * b->w[1] - y * b->w[0]);
@@ -109,12 +84,44 @@ static void plant_step(plant* b, const float* f, float dt) {
   }
 }
 
+/* One step of the quadrotor plant with the motors' thrusts (N). */
+static void plant_step(plant* b, const float* f, float dt) {
+  static const float rx[4] = {0.13f, -0.13f, -0.13f, 0.13f};
+  static const float ry[4] = {-0.13f, -0.13f, 0.13f, 0.13f};
+  static const float dir[4] = {1.0f, -1.0f, 1.0f, -1.0f};
+  const float m = 0.25f, jx = 0.000845f, jy = 0.000845f, jz = 0.00169f;
+  float fz = 0.0f, tx = 0.0f, ty = 0.0f, tz = 0.0f;
+  const float x = b->q[0], y = b->q[1], z = b->q[2], w = b->q[3];
+  float ax, ay, az, dwx, dwy, dwz;
+  int i;
+  for (i = 0; i < 4; ++i) {
+    fz += f[i];
+    tx += ry[i] * f[i];
+    ty += -rx[i] * f[i];
+    tz += -dir[i] * 0.01f * f[i];
+  }
+  /* World acceleration: R e_z fz / m + g (third column of R). */
+  ax = 2.0f * (x * z + w * y) * fz / m;
+  ay = 2.0f * (y * z - w * x) * fz / m;
+  az = (1.0f - 2.0f * (x * x + y * y)) * fz / m - 9.81f;
+  dwx = (tx - (jz - jy) * b->w[1] * b->w[2]) / jx;
+  dwy = (ty - (jx - jz) * b->w[2] * b->w[0]) / jy;
+  dwz = (tz - (jy - jx) * b->w[0] * b->w[1]) / jz;
+  b->v[0] += ax * dt;
+  b->v[1] += ay * dt;
+  b->v[2] += az * dt;
+  b->w[0] += dwx * dt;
+  b->w[1] += dwy * dt;
+  b->w[2] += dwz * dt;
+  plant_advance(b, dt);
+}
+
 /* Any airframe: force sum_i f_i a_i, torque sum_i p_i x f_i a_i - d_i ratio f_i a_i (a_i the
  * normalised axis), diagonal inertia j. */
 static void plant_step_af(plant* b, const kestrel_airframe* af, float m, const float* j, const float* f, float dt) {
   float F[3] = {0.0f, 0.0f, 0.0f}, T[3] = {0.0f, 0.0f, 0.0f};
-  float x = b->q[0], y = b->q[1], z = b->q[2], w = b->q[3], n;
-  float r[3][3], dw[3], qx, qy, qz, qw;
+  const float x = b->q[0], y = b->q[1], z = b->q[2], w = b->q[3];
+  float r[3][3], dw[3];
   int i, k;
   for (i = 0; i < af->num_rotors; ++i) {
     const kestrel_rotor* ro = &af->rotor[i];
@@ -146,25 +153,7 @@ static void plant_step_af(plant* b, const kestrel_airframe* af, float m, const f
   dw[1] = (T[1] - (j[0] - j[2]) * b->w[2] * b->w[0]) / j[1];
   dw[2] = (T[2] - (j[1] - j[0]) * b->w[0] * b->w[1]) / j[2];
   for (k = 0; k < 3; ++k) b->w[k] += dw[k] * dt;
-  for (k = 0; k < 3; ++k) b->p[k] += b->v[k] * dt;
-  qx = 0.5f * dt * (w * b->w[0] + y * b->w[2] - z * b->w[1]);
-  qy = 0.5f * dt * (w * b->w[1] + z * b->w[0] - x * b->w[2]);
-  qz = 0.5f * dt * (w * b->w[2] + x * b->w[1] - y * b->w[0]);
-  qw = 0.5f * dt * (-x * b->w[0] - y * b->w[1] - z * b->w[2]);
-  x += qx;
-  y += qy;
-  z += qz;
-  w += qw;
-  n = sqrtf_newton(x * x + y * y + z * z + w * w);
-  b->q[0] = x / n;
-  b->q[1] = y / n;
-  b->q[2] = z / n;
-  b->q[3] = w / n;
-  if (b->p[2] < 0.0f) {
-    b->p[2] = 0.0f;
-    if (b->v[2] < 0.0f) b->v[0] = b->v[1] = b->v[2] = 0.0f;
-    b->w[0] = b->w[1] = b->w[2] = 0.0f;
-  }
+  plant_advance(b, dt);
 }
 
 /* Every output field but the padding, bit for bit. */
