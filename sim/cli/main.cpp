@@ -20,6 +20,7 @@
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/schema.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -80,6 +81,7 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
   std::printf("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
               ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), cfg.controller.name.c_str(),
               cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
+  std::printf("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
   double reward_sum = 0, first_quarter = 0, last_quarter = 0;
   const long long quarter = std::max(1LL, steps / 4);
   const auto t0 = std::chrono::steady_clock::now();
@@ -213,6 +215,7 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   std::printf("  sim %s (dt %.4g s), env %s, robot %s x%d, controller %s, task %s\n", cfg.sim.name.c_str(),
               static_cast<double>(cfg.sim.dt_s), cfg.env.name.c_str(), cfg.robot.name.c_str(), cfg.robot.robots_per_env,
               cfg.controller.name.c_str(), cfg.task.name.c_str());
+  std::printf("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
   std::printf("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
               world->obstacle_capacity(), world->num_threads(), cfg.seed, r.steps);
   for (int k = 0; k < world->num_sensors(); ++k) {

@@ -2,9 +2,62 @@
 
 #include "kestrel/allocation/presets.hpp"
 
+#include <cstdio>
+#include <utility>
+
 namespace kestrel::sim {
 
 namespace al = kestrel::allocation;
+
+namespace {
+std::string fixed(double v, int digits) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", digits, v);
+  return b;
+}
+std::string general(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+}  // namespace
+
+RobotFigures robot_figures(const WorldConfig& config, const robots::MultirotorModel& m) {
+  RobotFigures f;
+  f.mass_kg = static_cast<double>(config.robot.mass_kg);
+  f.weight_N = f.mass_kg * static_cast<double>(config.sim.gravity_w.norm());
+  f.num_rotors = m.airframe.num_rotors;
+  for (int k = 0; k < m.airframe.num_rotors; ++k) {
+    // Force along body z at full thrust (a tilted or downward rotor counts by its z share).
+    const double z = static_cast<double>(m.airframe.effectiveness(2, k)) * static_cast<double>(m.airframe.thrust_max_N[k]);
+    if (z > 0) f.max_thrust_N += z;
+  }
+  f.thrust_to_weight = f.weight_N > 0 ? f.max_thrust_N / f.weight_N : 0;
+  return f;
+}
+
+std::string describe_robot(const WorldConfig& config, const robots::MultirotorModel& m) {
+  const RobotConfig& rc = config.robot;
+  const RobotFigures f = robot_figures(config, m);
+  std::string s = rc.name + ": mass " + general(f.mass_kg) + " kg, inertia diag [" + general(rc.inertia_diag_kg_m2[0]) + ", " +
+                  general(rc.inertia_diag_kg_m2[1]) + ", " + general(rc.inertia_diag_kg_m2[2]) + "] kg m^2, " +
+                  std::to_string(f.num_rotors) + " rotors (" + (rc.rotors.empty() ? "airframe preset" : "URDF geometry") + ", ";
+  bool same = true;
+  for (int k = 1; k < m.airframe.num_rotors; ++k) same = same && m.airframe.thrust_max_N[k] == m.airframe.thrust_max_N[0];
+  s += same && f.num_rotors > 0 ? std::to_string(f.num_rotors) + " x " + general(m.airframe.thrust_max_N[0]) + " N"
+                                : std::string("per-rotor limits");
+  s += "), max thrust " + general(f.max_thrust_N) + " N, weight " + general(f.weight_N) + " N, T/W " +
+       (f.weight_N > 0 ? fixed(f.thrust_to_weight, 2) : std::string("n/a (no gravity)"));
+  return s;
+}
+
+std::string describe_robot(const WorldConfig& config) {
+  robots::MultirotorModel m;
+  std::string err;
+  if (config.robot.kind != robots::RobotKind::multirotor) return config.robot.name + ": mass " + general(config.robot.mass_kg) + " kg";
+  if (!compile_multirotor(config, m, err)) return config.robot.name + ": " + err;
+  return describe_robot(config, m);
+}
 
 bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, std::string& error) {
   auto fail = [&error](const std::string& msg) {
@@ -47,13 +100,48 @@ bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, s
                 "lee_attitude_control, lee_rates_control, lee_velocity_steering_angle_control, rov_fully_actuated_control or "
                 "direct_motor_control");
   m.controller = config.controller.kind;
-  m.ctrl.lee = rc.airframe == al::AirframePreset::base_rov ? lee_params_rov() : lee_params_base_quadrotor();
+  const ControllerConfig& cc = config.controller;
+  if (rc.airframe == al::AirframePreset::base_rov) {
+    m.ctrl.lee = lee_params_rov();
+  } else {
+    // The controller section's parameters (sim/config.hpp ControllerConfig; defaults = the preset).
+    m.ctrl.lee = lee_params_base_quadrotor();
+    LeeGainRanges& g = m.ctrl.lee.gain_ranges;
+    const std::pair<const char*, std::pair<Vec3, Vec3>> ranges[4] = {{"k_pos", {cc.k_pos_min, cc.k_pos_max}},
+                                                                      {"k_vel", {cc.k_vel_min, cc.k_vel_max}},
+                                                                      {"k_rot", {cc.k_rot_min, cc.k_rot_max}},
+                                                                      {"k_angvel", {cc.k_angvel_min, cc.k_angvel_max}}};
+    for (const auto& r : ranges)
+      for (int k = 0; k < 3; ++k)
+        if (!(r.second.first[k] <= r.second.second[k]))
+          return fail(std::string("controller.") + r.first + "_min: expected <= " + r.first + "_max on every axis, got " +
+                      std::to_string(r.second.first[k]) + " > " + std::to_string(r.second.second[k]) + " at [" + std::to_string(k) + "]");
+    g.min = LeeGains{cc.k_pos_min, cc.k_vel_min, cc.k_rot_min, cc.k_angvel_min};
+    g.max = LeeGains{cc.k_pos_max, cc.k_vel_max, cc.k_rot_max, cc.k_angvel_max};
+    m.ctrl.lee.max_yaw_rate_radps = cc.max_yaw_rate_rad_s;
+    if (!(cc.action_min < cc.action_max))
+      return fail("controller.action_min: expected < action_max, got " + std::to_string(cc.action_min) + " >= " +
+                  std::to_string(cc.action_max));
+    m.ctrl.lee.action_min = cc.action_min;
+    m.ctrl.lee.action_max = cc.action_max;
+  }
   m.ctrl.lee.mass_kg = rc.mass_kg;
   m.ctrl.lee.inertia_b = rc.inertia_diag_kg_m2.asDiagonal();
   m.ctrl.lee.gravity_w = config.sim.gravity_w;
-  m.ctrl.lee.randomize_gains = config.controller.randomize_gains;
+  m.ctrl.lee.randomize_gains = cc.randomize_gains;
   // Lee parameters are checked for every kind (a direct-motor world still reports them).
-  if (validate_lee_params(m.ctrl.lee) != Status::ok) return fail("controller: invalid Lee parameters");
+  if (validate_lee_params(m.ctrl.lee) != Status::ok)
+    return fail("controller: invalid Lee parameters (gains within [0, " + std::to_string(kLeeMaxGain) + "], min <= max; robot.mass_kg in (0, " +
+                std::to_string(kLeeMaxMassKg) + "])");
+  // Thrust-to-weight (as the C API's KESTREL_INSUFFICIENT_THRUST): below 1 the multirotor cannot
+  // leave the ground and every episode ends in a crash, so the world is refused with its figures.
+  if (rc.airframe != al::AirframePreset::base_rov) {
+    const RobotFigures f = robot_figures(config, m);
+    if (f.weight_N > 0 && f.thrust_to_weight < 1)
+      return fail("robot: thrust-to-weight ratio " + fixed(f.thrust_to_weight, 2) + " < 1: " + describe_robot(config, m) +
+                  "; it cannot take off. Lower robot.mass_kg or pick motors for it (robot.airframe: " +
+                  "base_quadrotor 4 x 2 N, x500 4 x 10 N, hexarotor 6 x 8 N)");
+  }
   if (robots::finish_multirotor_model(m) != Status::ok)
     return fail("robot: the airframe, motor model and controller " + config.controller.name + " do not fit together");
   return true;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/schema.hpp"
@@ -58,10 +59,10 @@ bool get_bool(const YAML::Node& n, const std::string& f) {
   if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) bad(f, "expected true or false, got \"" + scalar_text(n) + "\"");
   return v;
 }
-Vec3 get_vec3(const YAML::Node& n, const std::string& f) {
+Vec3 get_vec3(const YAML::Node& n, const std::string& f, double lo = -1e9, double hi = 1e9) {
   if (!n.IsSequence() || n.size() != 3) bad(f, "expected a list of 3 numbers, got " + scalar_text(n));
   Vec3 v;
-  for (int i = 0; i < 3; ++i) v[i] = get_real(n[i], f + "[" + std::to_string(i) + "]", -1e9, 1e9);
+  for (int i = 0; i < 3; ++i) v[i] = get_real(n[i], f + "[" + std::to_string(i) + "]", lo, hi);
   return v;
 }
 
@@ -121,7 +122,7 @@ void apply_schema(const YAML::Node& n, const std::string& where, const Schema<S>
                              : get_int(v, name, static_cast<int>(f.lo), static_cast<int>(f.hi), f.limit ? f.limit : "limit");
         break;
       case FieldType::boolean: s.*f.b = get_bool(v, name); break;
-      case FieldType::vec3: s.*f.v = get_vec3(v, name); break;
+      case FieldType::vec3: s.*f.v = get_vec3(v, name, f.lo, f.hi); break;
       case FieldType::range: {
         if (!v.IsSequence() || v.size() != 2) bad(name, "expected [min, max], got " + scalar_text(v));
         const real mn = get_real(v[0], name + "[0]", f.lo, f.hi), mx = get_real(v[1], name + "[1]", f.lo, f.hi);
@@ -153,6 +154,18 @@ void apply_task(const YAML::Node& n, TaskConfig& t) {
     if (!cur.IsMap()) bad("task.curriculum", "expected a map of " + std::string(curriculum_schema().doc));
     apply_schema(cur, "task.curriculum", curriculum_schema(), t.curriculum);
   }
+  if (const YAML::Node r = n["reward"]) {
+    // The reward constants of the task the section names (TaskConfig::reward / navigation.reward).
+    if (!r.IsMap()) bad("task.reward", "expected a map of the reward's constants");
+    if (t.name == "navigation_task") {
+      apply_schema(r, "task.reward", navigation_reward_schema(), t.navigation.reward);
+    } else if (custom_tasks().has(t.name)) {
+      bad("task.reward", "task " + t.name + " builds its reward from terms in code (sim/custom_task.hpp); task.reward sets "
+                         "position_setpoint_task's and navigation_task's constants");
+    } else {
+      apply_schema(r, "task.reward", position_setpoint_reward_schema(), t.reward);
+    }
+  }
   if (const YAML::Node nav = n["navigation"]) {
     if (!nav.IsMap()) bad("task.navigation", "expected a map of max_speed_m_s, max_yaw_rate_rad_s, pool_rows, pool_cols, reward");
     apply_schema(nav, "task.navigation", navigation_schema(), t.navigation);
@@ -161,6 +174,59 @@ void apply_task(const YAML::Node& n, TaskConfig& t) {
       apply_schema(r, "task.navigation.reward", navigation_reward_schema(), t.navigation.reward);
     }
   }
+}
+
+/// controller: a registry name or a map of ControllerConfig's keys (schema rows) plus k_pos, k_vel,
+/// k_rot, k_angvel: a fixed gain (min = max). Cross-field rules checked here name the field.
+void parse_controller(const YAML::Node& n, ControllerConfig& c) {
+  c = lookup(registries().controllers, section_name(n, "controller"), "controller");
+  apply_schema(n, "controller", controller_schema(), c);
+  if (!n.IsMap()) return;
+  const struct {
+    const char* key;
+    Vec3 ControllerConfig::*min;
+    Vec3 ControllerConfig::*max;
+  } gains[] = {{"k_pos", &ControllerConfig::k_pos_min, &ControllerConfig::k_pos_max},
+               {"k_vel", &ControllerConfig::k_vel_min, &ControllerConfig::k_vel_max},
+               {"k_rot", &ControllerConfig::k_rot_min, &ControllerConfig::k_rot_max},
+               {"k_angvel", &ControllerConfig::k_angvel_min, &ControllerConfig::k_angvel_max}};
+  for (const auto& g : gains) {
+    const std::string key = g.key, f = "controller." + key;
+    if (const YAML::Node v = n[g.key]) {
+      if (n[key + "_min"] || n[key + "_max"]) bad(f, "give either " + key + " (a fixed gain) or " + key + "_min / " + key + "_max, not both");
+      if (!v.IsSequence() || v.size() != 3) bad(f, "expected a list of 3 numbers, got " + scalar_text(v));
+      Vec3 x;
+      for (int i = 0; i < 3; ++i) x[i] = get_real(v[i], f + "[" + std::to_string(i) + "]", 0, static_cast<double>(kLeeMaxGain));
+      c.*g.min = x;
+      c.*g.max = x;
+    }
+    for (int i = 0; i < 3; ++i)
+      if (!((c.*g.min)[i] <= (c.*g.max)[i]))
+        bad("controller." + key + "_min", "expected <= " + key + "_max on every axis, got " + std::to_string((c.*g.min)[i]) + " > " +
+                                              std::to_string((c.*g.max)[i]) + " at [" + std::to_string(i) + "]");
+  }
+  if (!(c.action_min < c.action_max)) bad("controller.action_min", "expected < action_max");
+}
+
+/// One entry of `sensors:` (or a registered sensor): the preset, then the keys of its kind's schema
+/// (sim/schema.hpp: lidar / ToF, camera, IMU), then the rules between fields.
+SensorConfig parse_sensor(const YAML::Node& n, const std::string& field) {
+  if (!n.IsScalar() && !n.IsMap()) bad(field, "expected a sensor name or a map with `name`");
+  SensorConfig sc = lookup(registries().sensors, section_name(n, field), "sensors");
+  if (!n.IsMap()) return sc;
+  const std::string& where = field;
+  if (sc.kind == SensorKind::imu) {
+    ImuSensorFields f = imu_sensor_fields(sc);
+    apply_schema(n, where, imu_sensor_schema(), f);
+    set_imu_sensor_fields(f, sc);
+  } else {
+    RaySensorFields f = ray_sensor_fields(sc);
+    apply_schema(n, where, sc.kind == SensorKind::camera ? camera_sensor_schema() : lidar_sensor_schema(), f);
+    set_ray_sensor_fields(f, sc);
+  }
+  std::string err;
+  if (!check_sensor_cross_fields(sc, where, err)) throw ScenarioError(err);
+  return sc;
 }
 
 void parse_sim(const YAML::Node& n, SimParams& s) {
@@ -271,8 +337,9 @@ void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& whe
   if (!n.IsMap()) return;
   if (n["urdf"]) {
     // Mass, inertia, collision shape and rotors from a URDF (sim/urdf.hpp); the fields below override it.
-    std::string err;
-    if (!apply_urdf(resolve_path(dir, n["urdf"].Scalar()), r, err)) bad(where + ".urdf", err);
+    std::string err, urdf_name;
+    if (!apply_urdf(resolve_path(dir, n["urdf"].Scalar()), r, err, &urdf_name)) bad(where + ".urdf", err);
+    if (r.name.empty()) r.name = urdf_name.empty() ? std::string("urdf_robot") : urdf_name;
   }
   apply_schema(n, where, robot_schema(), r);
   if (const YAML::Node s = n["collision_shape"]) {
@@ -283,7 +350,11 @@ void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& whe
 }
 
 void parse_robot(const YAML::Node& n, RobotConfig& r, const std::string& dir) {
-  r = lookup(registries().robots, section_name(n, "robot"), "robot");
+  // `robot: {urdf: FILE}` (README): without `name` a URDF robot starts from base_quadrotor (its
+  // motors, 4 x 2 N, unless `airframe` says otherwise) and is named after the URDF's <robot name>.
+  const bool urdf_only = n.IsMap() && !n["name"] && n["urdf"];
+  r = lookup(registries().robots, urdf_only ? std::string("base_quadrotor") : section_name(n, "robot"), "robot");
+  if (urdf_only) r.name.clear();
   if (n.IsMap() && n["file"]) {
     // A robot file: the same fields as the robot section, in a file of its own.
     const std::string path = n["file"].Scalar();
@@ -313,8 +384,7 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::str
   parse_env(root["env"] ? root["env"] : YAML::Node(td.env), c.env, dir, source);
   parse_robot(root["robot"] ? root["robot"] : YAML::Node(td.robot), c.robot, dir);
   const YAML::Node ctrl = root["controller"] ? root["controller"] : YAML::Node(td.controller);
-  c.controller = lookup(registries().controllers, section_name(ctrl, "controller"), "controller");
-  apply_schema(ctrl, "controller", controller_schema(), c.controller);
+  parse_controller(ctrl, c.controller);
   const YAML::Node task = root["task"] ? root["task"] : YAML::Node("position_setpoint");
   c.task = lookup(registries().tasks, section_name(task, "task"), "task");
   apply_task(task, c.task);
@@ -327,16 +397,8 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::str
     }
   }
   if (const YAML::Node s = root["sensors"]) {
-    if (!s.IsSequence()) bad("sensors", "expected a list of sensor names or {name, every} maps");
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      const std::string field = "sensors[" + std::to_string(i) + "]";
-      if (!s[i].IsScalar() && !s[i].IsMap()) bad(field, "expected a sensor name or a map with `name`");
-      SensorConfig sc = lookup(registries().sensors, section_name(s[i], field), "sensors");
-      check_keys(s[i], field, {"every"});
-      if (s[i].IsMap() && s[i]["every"])
-        sc.every_env_steps = get_int(s[i]["every"], field + ".every", 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps");
-      c.robot.sensors.push_back(sc);
-    }
+    if (!s.IsSequence()) bad("sensors", "expected a list of sensor names or {name, every, ...} maps");
+    for (std::size_t i = 0; i < s.size(); ++i) c.robot.sensors.push_back(parse_sensor(s[i], "sensors[" + std::to_string(i) + "]"));
   }
   if (root["simulator"]) parse_simulator(root["simulator"], c.simulator);
   if (root["seed"]) c.seed = static_cast<std::uint64_t>(get_int(root["seed"], "seed", 0));
@@ -422,14 +484,12 @@ bool register_preset(const std::string& kind, const std::string& name, const std
     }
     if (kind == "controller") {
       // The controller's name stays its kind's (it selects the control law); the preset adds options.
-      ControllerConfig v = lookup(r.controllers, section_name(n, "controller"), "controller");
-      apply_schema(n, "controller", controller_schema(), v);
+      ControllerConfig v;
+      parse_controller(n, v);
       return add(r.controllers, v);
     }
     if (kind == "sensor") {
-      SensorConfig v = lookup(r.sensors, section_name(n, "sensor"), "sensor");
-      check_keys(n, "sensor", {"every"});
-      if (n.IsMap() && n["every"]) v.every_env_steps = get_int(n["every"], "sensor.every", 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps");
+      SensorConfig v = parse_sensor(n, "sensor");
       v.name = name;
       return add(r.sensors, v);
     }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "kestrel/sim/limits.hpp"
 
@@ -60,6 +61,13 @@ Field<S> vec3_f(const char* key, Vec3 S::*m, const char* unit, const char* doc, 
   f.hi = 1e9;
   f.doc = doc;
   f.alias = alias;
+  return f;
+}
+template <class S>
+Field<S> vec3b_f(const char* key, Vec3 S::*m, const char* unit, double lo, double hi, const char* doc) {
+  Field<S> f = vec3_f<S>(key, m, unit, doc);
+  f.lo = lo;
+  f.hi = hi;
   return f;
 }
 template <class S>
@@ -126,6 +134,7 @@ const char* const kShapes[] = {"sphere", "box", "capsule", "cylinder"};
 const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall", "wall", "thin", "sphere", "mesh"};
 const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
 const char* const kNavigationActionSpaces[] = {"forward_inclination", "velocity"};
+const char* const kNoiseModels[] = {"none", "range_dependent", "multiplier"};
 
 }  // namespace
 
@@ -319,11 +328,32 @@ const Schema<ShapeSpec>& shape_schema() {
 
 const Schema<ControllerConfig>& controller_schema() {
   using S = ControllerConfig;
+  const double g = static_cast<double>(kLeeMaxGain);
   static const Field<S> f[] = {
-      bool_f<S>("randomize_gains", &S::randomize_gains, "draw the Lee gains per reset within their ranges"),
+      bool_f<S>("randomize_gains", &S::randomize_gains, "draw the Lee gains per reset within [min, max] (else the midpoints fly)"),
+      vec3b_f<S>("k_pos_min", &S::k_pos_min, "m/s^2 per m", 0, g, "position gain range, min (Lee family; `k_pos: [x, y, z]` sets min = max)"),
+      vec3b_f<S>("k_pos_max", &S::k_pos_max, "m/s^2 per m", 0, g, "position gain range, max (>= min)"),
+      vec3b_f<S>("k_vel_min", &S::k_vel_min, "m/s^2 per m/s", 0, g, "velocity gain range, min (`k_vel` sets min = max)"),
+      vec3b_f<S>("k_vel_max", &S::k_vel_max, "m/s^2 per m/s", 0, g, "velocity gain range, max"),
+      vec3b_f<S>("k_rot_min", &S::k_rot_min, "N m per e_R", 0, g, "attitude gain range, min (`k_rot` sets min = max)"),
+      vec3b_f<S>("k_rot_max", &S::k_rot_max, "N m per e_R", 0, g, "attitude gain range, max"),
+      vec3b_f<S>("k_angvel_min", &S::k_angvel_min, "N m per rad/s", 0, g, "body-rate gain range, min (`k_angvel` sets min = max)"),
+      vec3b_f<S>("k_angvel_max", &S::k_angvel_max, "N m per rad/s", 0, g, "body-rate gain range, max"),
+      real_f<S>("max_yaw_rate_rad_s", &S::max_yaw_rate_rad_s, "rad/s", 0, 1e3, "clamp on the desired body-z rate"),
+      real_f<S>("action_min", &S::action_min, "", -1e6, 1e6, "every action component is clipped to [action_min, action_max]"),
+      real_f<S>("action_max", &S::action_max, "", -1e6, 1e6, "(> action_min)"),
   };
-  static const Schema<S> s{"controller", "the controller (`controller: NAME`, a registry name, or a map with `name`)", f, std::size(f),
-                           nullptr, 0};
+  static const StructuralKey st[] = {
+      {"k_pos", "[x, y, z] in [0, 1e6], m/s^2 per m: a fixed position gain (k_pos_min = k_pos_max = it); not with k_pos_min / k_pos_max"},
+      {"k_vel", "[x, y, z] in [0, 1e6], m/s^2 per m/s: a fixed velocity gain"},
+      {"k_rot", "[x, y, z] in [0, 1e6], N m per e_R: a fixed attitude gain"},
+      {"k_angvel", "[x, y, z] in [0, 1e6], N m per rad/s: a fixed body-rate gain"},
+  };
+  static const Schema<S> s{"controller",
+                           "the controller (`controller: NAME`, a registry name, or a map with `name` and overrides); the gains are "
+                           "the Lee family's (LeeParams: Aerial Gym's lee_controller_config by default; a base_rov airframe keeps the "
+                           "ROV preset), each nominal gain the midpoint of its [min, max]",
+                           f, std::size(f), st, std::size(st)};
   return s;
 }
 
@@ -341,7 +371,9 @@ const Schema<TaskConfig>& task_schema() {
       real_f<S>("setpoint_speed_m_s", &S::setpoint_speed_m_s, "m/s", 0, 1000, "moving setpoint speed towards the target (0: the target)"),
   };
   static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"},
-                                     {"navigation", "navigation_task's action scaling, pooling and reward (section task.navigation)"}};
+                                     {"navigation", "navigation_task's action scaling, pooling and reward (section task.navigation)"},
+                                     {"reward", "the reward's constants: position_setpoint_task's (section task.reward); for "
+                                                "navigation_task the keys of task.navigation.reward"}};
   static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f),
                            st, std::size(st)};
   return s;
@@ -398,6 +430,264 @@ const Schema<NavigationRewardParams>& navigation_reward_schema() {
   return s;
 }
 
+const Schema<PositionSetpointRewardParams>& position_setpoint_reward_schema() {
+  using S = PositionSetpointRewardParams;
+  constexpr double kBig = 1e6;
+  static const Field<S> f[] = {
+      real_f<S>("pos_reward_magnitude_1", &S::pos_reward_magnitude_1, "", -kBig, kBig,
+                "pos = magnitude_1 exp(-exponent_1 d^2) + magnitude_2 exp(-exponent_2 d^2), d = |target - position| (m)"),
+      real_f<S>("pos_reward_exponent_1", &S::pos_reward_exponent_1, "1/m^2", -kBig, kBig, ""),
+      real_f<S>("pos_reward_magnitude_2", &S::pos_reward_magnitude_2, "", -kBig, kBig, ""),
+      real_f<S>("pos_reward_exponent_2", &S::pos_reward_exponent_2, "1/m^2", -kBig, kBig, ""),
+      real_f<S>("distance_reward_offset_m", &S::distance_reward_offset_m, "m", -kBig, kBig, "dist = (offset - d) / divisor"),
+      real_f<S>("distance_reward_divisor_m", &S::distance_reward_divisor_m, "m", 1e-6, kBig, ""),
+      real_f<S>("up_reward_magnitude", &S::up_reward_magnitude, "", -kBig, kBig, "up = magnitude / (offset + tilt^2), tilt = |1 - up_z|"),
+      real_f<S>("up_reward_offset", &S::up_reward_offset, "", 1e-6, kBig, ""),
+      real_f<S>("spin_reward_magnitude", &S::spin_reward_magnitude, "", -kBig, kBig, "spin = magnitude / (1 + |body rates|^2)"),
+      real_f<S>("crash_distance_m", &S::crash_distance_m, "m", 0, kBig, "d beyond this is a crash (the episode ends)"),
+      real_f<S>("crash_reward", &S::crash_reward, "", -kBig, kBig, "the reward of a crash; otherwise pos + dist + pos (up + spin)"),
+  };
+  static const Schema<S> s{"task.reward", "position_setpoint_task's reward (Aerial Gym's compute_reward, float32)", f, std::size(f),
+                           nullptr, 0};
+  return s;
+}
+
+RaySensorFields ray_sensor_fields(const SensorConfig& c) {
+  RaySensorFields f;
+  const bool cam = c.kind == SensorKind::camera;
+  const sensors::RangeOutputParams& r = cam ? c.camera.range : c.lidar.range;
+  const sensors::OutputFlags& o = cam ? c.camera.output : c.lidar.output;
+  const sensors::MountParams& m = cam ? c.camera.mount : c.lidar.mount;
+  const sensors::NoiseParams& n = cam ? c.camera.noise : c.lidar.noise;
+  f.every_env_steps = c.every_env_steps;
+  f.height = static_cast<int>(cam ? c.camera.height : c.lidar.height);
+  f.width = static_cast<int>(cam ? c.camera.width : c.lidar.width);
+  f.horizontal_fov_deg_min = c.lidar.horizontal_fov_deg_min;
+  f.horizontal_fov_deg_max = c.lidar.horizontal_fov_deg_max;
+  f.vertical_fov_deg_min = c.lidar.vertical_fov_deg_min;
+  f.vertical_fov_deg_max = c.lidar.vertical_fov_deg_max;
+  f.horizontal_fov_deg = c.camera.horizontal_fov_deg;
+  f.calculate_depth = c.camera.calculate_depth;
+  f.min_range_m = r.min_range;
+  f.max_range_m = r.max_range;
+  f.normalize_range = r.normalize_range;
+  f.far_out_of_range_value = r.far_out_of_range_value;
+  f.near_out_of_range_value = r.near_out_of_range_value;
+  f.return_pointcloud = o.return_pointcloud;
+  f.pointcloud_in_world_frame = o.pointcloud_in_world_frame;
+  f.segmentation_camera = o.segmentation_camera;
+  f.nominal_position_b_m = m.nominal_position_b;
+  f.nominal_euler_deg = m.nominal_euler_deg;
+  f.randomize_placement = m.randomize_placement;
+  f.min_translation_b_m = m.min_translation_b;
+  f.max_translation_b_m = m.max_translation_b;
+  f.min_euler_deg = m.min_euler_deg;
+  f.max_euler_deg = m.max_euler_deg;
+  f.fixed_pose_at_range_mean = m.fixed_pose_at_range_mean;
+  f.enable_sensor_noise = n.enable_sensor_noise;
+  f.noise_model = n.model;
+  f.noise_a = n.a;
+  f.noise_b = n.b;
+  f.noise_c = n.c;
+  f.noise_mean_offset_m = n.mean_offset;
+  f.std_dev_multiplier = n.std_dev_multiplier;
+  f.pixel_dropout_prob = n.pixel_dropout_prob;
+  return f;
+}
+
+void set_ray_sensor_fields(const RaySensorFields& f, SensorConfig& c) {
+  const bool cam = c.kind == SensorKind::camera;
+  sensors::RangeOutputParams& r = cam ? c.camera.range : c.lidar.range;
+  sensors::OutputFlags& o = cam ? c.camera.output : c.lidar.output;
+  sensors::MountParams& m = cam ? c.camera.mount : c.lidar.mount;
+  sensors::NoiseParams& n = cam ? c.camera.noise : c.lidar.noise;
+  c.every_env_steps = f.every_env_steps;
+  if (cam) {
+    c.camera.height = static_cast<std::uint32_t>(f.height);
+    c.camera.width = static_cast<std::uint32_t>(f.width);
+    c.camera.horizontal_fov_deg = f.horizontal_fov_deg;
+    c.camera.calculate_depth = f.calculate_depth;
+  } else {
+    c.lidar.height = static_cast<std::uint32_t>(f.height);
+    c.lidar.width = static_cast<std::uint32_t>(f.width);
+    c.lidar.horizontal_fov_deg_min = f.horizontal_fov_deg_min;
+    c.lidar.horizontal_fov_deg_max = f.horizontal_fov_deg_max;
+    c.lidar.vertical_fov_deg_min = f.vertical_fov_deg_min;
+    c.lidar.vertical_fov_deg_max = f.vertical_fov_deg_max;
+  }
+  r.min_range = f.min_range_m;
+  r.max_range = f.max_range_m;
+  r.normalize_range = f.normalize_range;
+  r.far_out_of_range_value = f.far_out_of_range_value;
+  r.near_out_of_range_value = f.near_out_of_range_value;
+  o.return_pointcloud = f.return_pointcloud;
+  o.pointcloud_in_world_frame = f.pointcloud_in_world_frame;
+  o.segmentation_camera = f.segmentation_camera;
+  m.nominal_position_b = f.nominal_position_b_m;
+  m.nominal_euler_deg = f.nominal_euler_deg;
+  m.randomize_placement = f.randomize_placement;
+  m.min_translation_b = f.min_translation_b_m;
+  m.max_translation_b = f.max_translation_b_m;
+  m.min_euler_deg = f.min_euler_deg;
+  m.max_euler_deg = f.max_euler_deg;
+  m.fixed_pose_at_range_mean = f.fixed_pose_at_range_mean;
+  n.enable_sensor_noise = f.enable_sensor_noise;
+  n.model = f.noise_model;
+  n.a = f.noise_a;
+  n.b = f.noise_b;
+  n.c = f.noise_c;
+  n.mean_offset = f.noise_mean_offset_m;
+  n.std_dev_multiplier = f.std_dev_multiplier;
+  n.pixel_dropout_prob = f.pixel_dropout_prob;
+}
+
+ImuSensorFields imu_sensor_fields(const SensorConfig& c) {
+  ImuSensorFields f;
+  static_cast<sensors::ImuParams&>(f) = c.imu;
+  f.every_env_steps = c.every_env_steps;
+  return f;
+}
+
+void set_imu_sensor_fields(const ImuSensorFields& f, SensorConfig& c) {
+  c.imu = static_cast<const sensors::ImuParams&>(f);
+  c.every_env_steps = f.every_env_steps;
+}
+
+bool check_sensor_cross_fields(const SensorConfig& c, const std::string& where, std::string& error) {
+  auto fail = [&](const char* key, const std::string& what) {
+    error = where + "." + key + ": " + what;
+    return false;
+  };
+  auto ordered = [](const Vec3& a, const Vec3& b) { return a[0] <= b[0] && a[1] <= b[1] && a[2] <= b[2]; };
+  if (c.kind == SensorKind::imu) {
+    if (!ordered(c.imu.misalignment_min_deg, c.imu.misalignment_max_deg))
+      return fail("misalignment_min_deg", "expected <= misalignment_max_deg on every axis");
+    return true;
+  }
+  const RaySensorFields f = ray_sensor_fields(c);
+  if (!(f.min_range_m < f.max_range_m)) return fail("min_range_m", "expected < max_range_m, got " + std::to_string(f.min_range_m) + " >= " + std::to_string(f.max_range_m));
+  if (c.kind == SensorKind::lidar) {
+    if (!(f.horizontal_fov_deg_min <= f.horizontal_fov_deg_max)) return fail("horizontal_fov_deg_min", "expected <= horizontal_fov_deg_max");
+    if (!(f.vertical_fov_deg_min <= f.vertical_fov_deg_max)) return fail("vertical_fov_deg_min", "expected <= vertical_fov_deg_max");
+  }
+  if (!ordered(f.min_translation_b_m, f.max_translation_b_m)) return fail("min_translation_b_m", "expected <= max_translation_b_m on every axis");
+  if (!ordered(f.min_euler_deg, f.max_euler_deg)) return fail("min_euler_deg", "expected <= max_euler_deg on every axis");
+  return true;
+}
+
+namespace {
+
+/// The rows every ray sensor has (range, output flags, mount, noise).
+template <class Rows>
+void ray_common_rows(Rows& v) {
+  using S = RaySensorFields;
+  v.push_back(int_f<S>("every_env_steps", &S::every_env_steps, 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps",
+                       "render every this many env-steps (older key: every)"));
+  v.back().alias = "every";
+  v.push_back(int_f<S>("height", &S::height, 1, kMaxSensorSide, "kMaxSensorSide", "rows (scan lines) of the image"));
+  v.push_back(int_f<S>("width", &S::width, 1, kMaxSensorSide, "kMaxSensorSide", "columns of the image"));
+}
+template <class Rows>
+void ray_tail_rows(Rows& v) {
+  using S = RaySensorFields;
+  v.push_back(real_f<S>("min_range_m", &S::min_range_m, "m", 0, 1e4, "nearer returns read near_out_of_range_value (< max_range_m)"));
+  v.push_back(real_f<S>("max_range_m", &S::max_range_m, "m", 1e-3, 1e4, "farther returns (and no hit) read far_out_of_range_value"));
+  v.push_back(bool_f<S>("normalize_range", &S::normalize_range, "divide every value by max_range_m"));
+  v.push_back(real_f<S>("far_out_of_range_value", &S::far_out_of_range_value, "m", -1e6, 1e6,
+                        "value beyond max_range (kept from the preset when max_range_m changes, as Aerial Gym's classes do)"));
+  v.push_back(real_f<S>("near_out_of_range_value", &S::near_out_of_range_value, "m", -1e6, 1e6, "value below min_range and of dropped pixels"));
+  v.push_back(bool_f<S>("return_pointcloud", &S::return_pointcloud, "a point cloud instead of a range image"));
+  v.push_back(bool_f<S>("pointcloud_in_world_frame", &S::pointcloud_in_world_frame, "point cloud in the world frame (raw)"));
+  v.push_back(bool_f<S>("segmentation_camera", &S::segmentation_camera, "also render segment ids"));
+  v.push_back(vec3b_f<S>("nominal_position_b_m", &S::nominal_position_b_m, "m", -100, 100, "mount position on the body (fixed_pose_at_range_mean false)"));
+  v.push_back(vec3b_f<S>("nominal_euler_deg", &S::nominal_euler_deg, "deg", -360, 360, "mount roll, pitch, yaw (fixed_pose_at_range_mean false)"));
+  v.push_back(bool_f<S>("randomize_placement", &S::randomize_placement, "draw the mount per reset in the ranges below"));
+  v.push_back(vec3b_f<S>("min_translation_b_m", &S::min_translation_b_m, "m", -100, 100, "mount translation range, min"));
+  v.push_back(vec3b_f<S>("max_translation_b_m", &S::max_translation_b_m, "m", -100, 100, "mount translation range, max (>= min)"));
+  v.push_back(vec3b_f<S>("min_euler_deg", &S::min_euler_deg, "deg", -360, 360, "mount Euler range, min"));
+  v.push_back(vec3b_f<S>("max_euler_deg", &S::max_euler_deg, "deg", -360, 360, "mount Euler range, max (>= min)"));
+  v.push_back(bool_f<S>("fixed_pose_at_range_mean", &S::fixed_pose_at_range_mean,
+                        "not randomised: zero translation, Euler (min + max) / 2 (Aerial Gym's warp sensors); false: the nominal pose"));
+  v.push_back(bool_f<S>("enable_sensor_noise", &S::enable_sensor_noise, "apply noise_model"));
+  v.push_back(choice_f<S>(
+      "noise_model", "none, range_dependent, multiplier",
+      [](S& s, const std::string& x) { return set_enum(kNoiseModels, x, s.noise_model); },
+      [](const S& s) { return enum_name(kNoiseModels, s.noise_model); },
+      "range_dependent: N(r - noise_mean_offset_m, std noise_a r^2 + noise_b r + noise_c); multiplier: N(r, std std_dev_multiplier r)"));
+  v.push_back(real_f<S>("noise_a", &S::noise_a, "1/m", 0, 1e6, "range_dependent standard deviation a r^2 + b r + c, r^2 coefficient"));
+  v.push_back(real_f<S>("noise_b", &S::noise_b, "", -1e6, 1e6, "range_dependent standard deviation, r coefficient"));
+  v.push_back(real_f<S>("noise_c", &S::noise_c, "m", 0, 1e6, "range_dependent standard deviation, constant"));
+  v.push_back(real_f<S>("noise_mean_offset_m", &S::noise_mean_offset_m, "m", -1e3, 1e3, "range_dependent mean offset (subtracted)"));
+  v.push_back(real_f<S>("std_dev_multiplier", &S::std_dev_multiplier, "", 0, 100, "multiplier: standard deviation per metre of range"));
+  v.push_back(real_f<S>("pixel_dropout_prob", &S::pixel_dropout_prob, "", 0, 1, "probability a pixel drops out (reads near_out_of_range_value)"));
+}
+
+}  // namespace
+
+const Schema<RaySensorFields>& lidar_sensor_schema() {
+  using S = RaySensorFields;
+  static const std::vector<Field<S>> f = [] {
+    std::vector<Field<S>> v;
+    ray_common_rows(v);
+    v.push_back(real_f<S>("horizontal_fov_deg_min", &S::horizontal_fov_deg_min, "deg", -180, 180, "azimuth of the last column"));
+    v.push_back(real_f<S>("horizontal_fov_deg_max", &S::horizontal_fov_deg_max, "deg", -180, 180, "azimuth of column 0 (>= min)"));
+    v.push_back(real_f<S>("vertical_fov_deg_min", &S::vertical_fov_deg_min, "deg", -90, 90, "elevation of the last row"));
+    v.push_back(real_f<S>("vertical_fov_deg_max", &S::vertical_fov_deg_max, "deg", -90, 90, "elevation of row 0 (>= min)"));
+    ray_tail_rows(v);
+    return v;
+  }();
+  static const Schema<S> s{"sensors[] (lidar, ToF)",
+                           "a lidar or multizone ToF entry of `sensors:` (`{name: vl53l5cx, every: 2, max_range_m: 3}`): "
+                           "sensors::LidarParams; unset keys keep the preset's values (`kestrel list`), the defaults shown are the struct's",
+                           f.data(), f.size(), nullptr, 0};
+  return s;
+}
+
+const Schema<RaySensorFields>& camera_sensor_schema() {
+  using S = RaySensorFields;
+  static const std::vector<Field<S>> f = [] {
+    std::vector<Field<S>> v;
+    ray_common_rows(v);
+    v.push_back(real_f<S>("horizontal_fov_deg", &S::horizontal_fov_deg, "deg", 1e-3, 179.9, "horizontal field of view"));
+    v.push_back(bool_f<S>("calculate_depth", &S::calculate_depth, "depth along the optical axis (false: range along the ray)"));
+    ray_tail_rows(v);
+    return v;
+  }();
+  static const Schema<S> s{"sensors[] (camera)",
+                           "a depth camera entry of `sensors:`: sensors::CameraParams; unset keys keep the preset's values, the "
+                           "defaults shown are the struct's",
+                           f.data(), f.size(), nullptr, 0};
+  return s;
+}
+
+const Schema<ImuSensorFields>& imu_sensor_schema() {
+  using S = ImuSensorFields;
+  static const Field<S> f[] = {
+      [] {
+        Field<S> r = int_f<S>("every_env_steps", &S::every_env_steps, 1, kMaxSensorEveryEnvSteps, "kMaxSensorEveryEnvSteps",
+                              "unused by the IMU (it updates every physics step); older key: every");
+        r.alias = "every";
+        return r;
+      }(),
+      vec3b_f<S>("accel_noise_density", &S::accel_noise_density, "m/s^2/sqrt(Hz)", 0, 1e3, "accelerometer white noise density"),
+      vec3b_f<S>("gyro_noise_density", &S::gyro_noise_density, "rad/s/sqrt(Hz)", 0, 1e3, "gyroscope white noise density"),
+      vec3b_f<S>("accel_bias_random_walk", &S::accel_bias_random_walk, "m/s^3/sqrt(Hz)", 0, 1e3, "accelerometer bias random walk"),
+      vec3b_f<S>("gyro_bias_random_walk", &S::gyro_bias_random_walk, "rad/s^2/sqrt(Hz)", 0, 1e3, "gyroscope bias random walk"),
+      vec3b_f<S>("accel_initial_bias_max", &S::accel_initial_bias_max, "m/s^2", 0, 1e3, "initial bias drawn in [-max, max]"),
+      vec3b_f<S>("gyro_initial_bias_max", &S::gyro_initial_bias_max, "rad/s", 0, 1e3, "initial bias drawn in [-max, max]"),
+      vec3b_f<S>("accel_saturation", &S::accel_saturation, "m/s^2", 1e-6, 1e9, "measurement clamp +-"),
+      vec3b_f<S>("gyro_saturation", &S::gyro_saturation, "rad/s", 1e-6, 1e9, "measurement clamp +-"),
+      vec3b_f<S>("misalignment_min_deg", &S::misalignment_min_deg, "deg", -180, 180, "mount misalignment drawn per reset in [min, max]"),
+      vec3b_f<S>("misalignment_max_deg", &S::misalignment_max_deg, "deg", -180, 180, "(>= min)"),
+      bool_f<S>("enable_noise", &S::enable_noise, "white noise on"),
+      bool_f<S>("enable_bias", &S::enable_bias, "bias (initial + random walk) on"),
+      bool_f<S>("gravity_compensation", &S::gravity_compensation, "subtract gravity from the accelerometer"),
+  };
+  static const Schema<S> s{"sensors[] (IMU)", "an IMU entry of `sensors:`: sensors::ImuParams (gravity is the sim's); unset keys keep the preset's",
+                           f, std::size(f), nullptr, 0};
+  return s;
+}
+
 const Schema<CurriculumConfig>& curriculum_schema() {
   using S = CurriculumConfig;
   static const Field<S> f[] = {
@@ -429,8 +719,7 @@ std::string num(double v) {
 }
 
 template <class S>
-void document(std::ostringstream& out, const Schema<S>& sc) {
-  const S def{};
+void document(std::ostringstream& out, const Schema<S>& sc, const S& def = S{}) {
   out << "## `" << sc.section << "`\n\n" << sc.doc << ".\n\n| key | unit | type | allowed | default | meaning |\n|---|---|---|---|---|---|\n";
   for (std::size_t k = 0; k < sc.count; ++k) {
     const Field<S>& f = sc.fields[k];
@@ -453,7 +742,7 @@ void document(std::ostringstream& out, const Schema<S>& sc) {
         break;
       case FieldType::vec3: {
         type = "[x, y, z]";
-        allowed = "numbers";
+        allowed = f.lo <= -1e9 && f.hi >= 1e9 ? std::string("numbers") : "each in [" + num(f.lo) + ", " + num(f.hi) + "]";
         const Vec3& v = def.*f.v;
         dflt = "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
         break;
@@ -533,8 +822,17 @@ bool check_config_fields(const WorldConfig& c, std::string& error) {
       !check_fields(robot_schema(), c.robot, "robot", error) || !check_fields(shape_schema(), c.robot.shape, "robot.collision_shape", error) ||
       !check_fields(task_schema(), c.task, "task", error) || !check_fields(curriculum_schema(), c.task.curriculum, "task.curriculum", error) ||
       !check_fields(navigation_schema(), c.task.navigation, "task.navigation", error) ||
-      !check_fields(navigation_reward_schema(), c.task.navigation.reward, "task.navigation.reward", error))
+      !check_fields(navigation_reward_schema(), c.task.navigation.reward, "task.navigation.reward", error) ||
+      !check_fields(position_setpoint_reward_schema(), c.task.reward, "task.reward", error) ||
+      !check_fields(controller_schema(), c.controller, "controller", error))
     return false;
+  for (const SensorConfig& sc : c.robot.sensors) {
+    const std::string where = "sensors." + sc.name;
+    const bool ok = sc.kind == SensorKind::imu ? check_fields(imu_sensor_schema(), imu_sensor_fields(sc), where, error)
+                    : sc.kind == SensorKind::camera ? check_fields(camera_sensor_schema(), ray_sensor_fields(sc), where, error)
+                                                    : check_fields(lidar_sensor_schema(), ray_sensor_fields(sc), where, error);
+    if (!ok || !check_sensor_cross_fields(sc, where, error)) return false;
+  }
   for (const AssetClass& a : c.env.assets)
     if (!check_fields(asset_schema(), a, "env.assets." + a.name, error)) return false;
   return true;
@@ -547,7 +845,7 @@ std::string scenario_reference_markdown() {
          "`tests/sim/io/scenario_test.cpp` keeps this file equal to what they generate. Every section is a registry name "
          "(`kestrel list`) or a map with `name` and the keys below; a key overrides the preset's value. Defaults are the "
          "struct's own, before a preset. Top level: `sim`, `env`, `robot`, `controller`, `task`, `sensors` (list of sensor "
-         "names or `{name, every}`), `simulator`, `seed`, `threads` [1, " +
+         "names or maps `{name, every, ...}` with the keys of the sensor's kind below), `simulator`, `seed`, `threads` [1, " +
              std::to_string(kMaxThreads) + "], `max_memory_gib`.\n\n";
   document(out, sim_schema());
   document(out, simulator_schema());
@@ -561,6 +859,13 @@ std::string scenario_reference_markdown() {
   document(out, curriculum_schema());
   document(out, navigation_schema());
   document(out, navigation_reward_schema());
+  document(out, position_setpoint_reward_schema());
+  SensorConfig lidar, camera;
+  lidar.kind = SensorKind::lidar;
+  camera.kind = SensorKind::camera;
+  document(out, lidar_sensor_schema(), ray_sensor_fields(lidar));
+  document(out, camera_sensor_schema(), ray_sensor_fields(camera));
+  document(out, imu_sensor_schema());
   return out.str();
 }
 

@@ -161,9 +161,9 @@ void place_links(Tree& t) {
   }
 }
 
-/// Composite mass, centre of mass and inertia in the base frame; the body frame must be the centre
-/// of mass and the principal axes (Kestrel's rigid body takes a diagonal inertia).
-void composite_inertia(const Tree& t, UrdfRobot& out) {
+/// Composite mass, centre of mass (returned, base frame) and inertia about the centre of mass; the
+/// body axes must be principal axes (Kestrel's rigid body takes a diagonal inertia).
+V3 composite_inertia(const Tree& t, UrdfRobot& out) {
   const std::string& base = t.base;
   double mass = 0;
   V3 moment = V3::Zero();
@@ -198,13 +198,10 @@ void composite_inertia(const Tree& t, UrdfRobot& out) {
     moment += m * parts.back().c;
   }
   if (!(mass > 0)) bad("link[" + base + "]/inertial/mass", "the robot has no mass (expected a positive <mass value>)");
+  // The body frame is the composite centre of mass (Kestrel's rigid body turns about it): the
+  // rotors are re-expressed relative to it (read_rotors) and the inertia is taken about it below.
   const V3 com = moment / mass;
-  if (com.norm() > 1e-6) {
-    std::ostringstream s;
-    s << "the centre of mass is at (" << com[0] << ", " << com[1] << ", " << com[2]
-      << ") m from the base link origin; Kestrel's body frame is the centre of mass: put the base link origin there";
-    bad("link[" + base + "]/inertial/origin", s.str());
-  }
+  out.com_offset_m = Vec3(static_cast<real>(com[0]), static_cast<real>(com[1]), static_cast<real>(com[2]));
   M3 inertia = M3::Zero();
   for (const Part& p : parts) {
     const V3 d = p.c - com;
@@ -218,6 +215,7 @@ void composite_inertia(const Tree& t, UrdfRobot& out) {
         "principal axes; align the base frame with them");
   out.mass_kg = static_cast<real>(mass);
   out.inertia_diag_kg_m2 = Vec3(static_cast<real>(inertia(0, 0)), static_cast<real>(inertia(1, 1)), static_cast<real>(inertia(2, 2)));
+  return com;
 }
 
 /// The base link's collision shape (box, sphere or cylinder centred on the body frame), if any.
@@ -254,9 +252,9 @@ void base_shape(const Tree& tree, UrdfRobot& out) {
   }
 }
 
-/// Rotor links rotor_<N> / prop_<N>, numbered 0, 1, ... : position and thrust axis in the base
-/// frame, spin direction from their joint's axis.
-void read_rotors(const Tree& t, UrdfRobot& out) {
+/// Rotor links rotor_<N> / prop_<N>, numbered 0, 1, ... : position relative to the centre of mass
+/// `com` and thrust axis (base axes), spin direction from their joint's axis.
+void read_rotors(const Tree& t, const V3& com, UrdfRobot& out) {
   std::map<int, std::string> rotor_links;
   for (const auto& kv : t.links) {
     const int n = rotor_index(kv.first);
@@ -285,8 +283,9 @@ void read_rotors(const Tree& t, UrdfRobot& out) {
     if (std::fabs(a[2]) < 1 - 1e-6) bad(jw + "/axis@xyz", "expected 0 0 1 or 0 0 -1 (the rotor link's z axis is its thrust axis)");
     allocation::RotorSpec r{};
     const V3 axis = l.in_base.r.col(2);
+    const V3 hub = l.in_base.p - com;  // relative to the centre of mass (the body frame)
     for (int k = 0; k < 3; ++k) {
-      r.position_b_m[k] = static_cast<real>(l.in_base.p[k]);
+      r.position_b_m[k] = static_cast<real>(hub[k]);
       r.axis_b[k] = static_cast<real>(axis[k]);
     }
     out.rotors.push_back(r);
@@ -302,9 +301,9 @@ UrdfRobot parse(const tinyxml2::XMLDocument& doc) {
   Tree t = read_tree(robot);
   out.base_link = t.base;
   place_links(t);
-  composite_inertia(t, out);
+  const V3 com = composite_inertia(t, out);
   base_shape(t, out);
-  read_rotors(t, out);
+  read_rotors(t, com, out);
   return out;
 }
 
@@ -330,9 +329,10 @@ bool load_urdf(const std::string& path, UrdfRobot& out, std::string& error) {
   return false;
 }
 
-bool apply_urdf(const std::string& path, RobotConfig& robot, std::string& error) {
+bool apply_urdf(const std::string& path, RobotConfig& robot, std::string& error, std::string* urdf_name) {
   UrdfRobot u;
   if (!load_urdf(path, u, error)) return false;
+  if (urdf_name != nullptr) *urdf_name = u.name;
   robot.mass_kg = u.mass_kg;
   robot.inertia_diag_kg_m2 = u.inertia_diag_kg_m2;
   if (u.has_shape) robot.shape = u.shape;

@@ -103,7 +103,7 @@ class PositionSetpointTask final : public Task {
       for (int k = 0; k < 3; ++k) w[k] = static_cast<float>(sim_->base_ang_vel_b()[3 * i + k]);
       // Only |error| enters the reward: the world-frame error, not the reference's vehicle-frame
       // copy of it (same length; task.hpp).
-      const float r = position_setpoint_reward(e_w, q, w, 1.0f, crash);  // multiplier 1.0 as the task passes
+      const float r = position_setpoint_reward(e_w, q, w, 1.0f, crash, sim_->config().task.reward);  // multiplier 1.0 as the task passes
       rewards_[i] = r;
       terminations_[i] = crash;
       const std::uint8_t trunc = episode_step_[i] >= len_ ? 1 : 0;

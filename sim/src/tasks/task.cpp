@@ -128,21 +128,29 @@ bool Task::crash_or_out(int env) const {
 // -ffp-contract=off so no fused multiply-add changes a rounding.
 float position_setpoint_reward(const float e[3], const float q[4], const float w[3], float multiplier,
                                std::uint8_t& crash) {
+  return position_setpoint_reward(e, q, w, multiplier, crash, PositionSetpointRewardParams());
+}
+
+float position_setpoint_reward(const float e[3], const float q[4], const float w[3], float multiplier,
+                               std::uint8_t& crash, const PositionSetpointRewardParams& p) {
+  // The constants as float32 (exact for the defaults: the same bits as the reference's literals).
+  const auto f = [](real v) { return static_cast<float>(v); };
   const float d = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
   // exp_func(x, gain, exp) = gain * exp(-exp * x * x)
-  const float pos = 3.0f * std::exp(-8.0f * d * d) + 2.0f * std::exp(-4.0f * d * d);
-  const float dist = (20.0f - d) / 40.0f;
+  const float pos = f(p.pos_reward_magnitude_1) * std::exp(-f(p.pos_reward_exponent_1) * d * d) +
+                    f(p.pos_reward_magnitude_2) * std::exp(-f(p.pos_reward_exponent_2) * d * d);
+  const float dist = (f(p.distance_reward_offset_m) - d) / f(p.distance_reward_divisor_m);
   // quat_axis(q, 2)[2] via quat_rotate(q, e_z): a + b + c with a = v (2 w^2 - 1),
   // b = 2 w (q_vec x v) (zero z component for v = e_z), c = 2 q_vec (q_vec . v).
   const float qw = q[3];
   const float up_z = (2.0f * qw * qw - 1.0f) + 0.0f + q[2] * q[2] * 2.0f;
   const float tilt = std::fabs(1.0f - up_z);
-  const float up = 0.2f / (0.1f + tilt * tilt);
+  const float up = f(p.up_reward_magnitude) / (f(p.up_reward_offset) + tilt * tilt);
   const float s = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  const float spin = 3.0f / (1.0f + s * s);
+  const float spin = f(p.spin_reward_magnitude) / (1.0f + s * s);
   float reward = multiplier * (pos + dist + pos * (up + spin));
-  if (d > 8.0f) crash = 1;  // in place; an existing crash stays
-  if (crash > 0) reward = -20.0f;
+  if (d > f(p.crash_distance_m)) crash = 1;  // in place; an existing crash stays
+  if (crash > 0) reward = f(p.crash_reward);
   return reward;
 }
 

@@ -203,7 +203,7 @@ std::string valid_yaml(const Field<S>& f, double& expect) {
       break;
     case FieldType::vec3:
       expect = 0.125;
-      y << "[0.125, -0.25, 0.5]";
+      y << (f.lo >= 0 ? "[0.125, 0.25, 0.5]" : "[0.125, -0.25, 0.5]");  // bounded rows (gains) take no negatives
       break;
     case FieldType::range:
       expect = f.lo + (f.hi - f.lo) * 0.25;
@@ -241,12 +241,15 @@ void expect_field(const Field<S>& f, const S& s, double expect, const std::strin
 
 /// Every row of a section's schema: a valid value under its own key reaches its member; a value
 /// outside the allowed set is refused with a message naming section.key.
+/// `context` (if given) adds keys other than the one under test, so that rules between fields
+/// (the controller's min <= max) hold for any value a row allows.
 template <class S>
-void every_row(const Schema<S>& sc, const char* preset, S WorldConfig::*member) {
+void every_row(const Schema<S>& sc, const char* preset, S WorldConfig::*member, std::string (*context)(const std::string& key) = nullptr) {
   for (std::size_t k = 0; k < sc.count; ++k) {
     const Field<S>& f = sc.fields[k];
     double expect = 0;
-    const std::string text = std::string(sc.section) + ": {name: " + preset + ", " + f.key + ": " + valid_yaml(f, expect) + "}\n";
+    const std::string text = std::string(sc.section) + ": {name: " + preset + ", " + (context ? context(f.key) : std::string()) + f.key +
+                             ": " + valid_yaml(f, expect) + "}\n";
     WorldConfig c;
     std::string err;
     ASSERT_TRUE(load_scenario_string(text, "s.yaml", c, err)) << text << err;
@@ -300,7 +303,17 @@ TEST(SimScenario, EverySchemaRowIsReachableUnderItsOwnName) {
   every_row(robot_schema(), "base_quadrotor", &WorldConfig::robot);
   every_row(task_schema(), "position_setpoint", &WorldConfig::task);
   every_row(simulator_schema(), "rigid", &WorldConfig::simulator);
-  every_row(controller_schema(), "lee_position_control", &WorldConfig::controller);
+  every_row(controller_schema(), "lee_position_control", &WorldConfig::controller, [](const std::string& key) {
+    // Widest ranges on every other gain and action bound, so the row's own value keeps min <= max.
+    std::string ctx;
+    for (const char* g : {"k_pos", "k_vel", "k_rot", "k_angvel"}) {
+      if (key != std::string(g) + "_min") ctx += std::string(g) + "_min: [0, 0, 0], ";
+      if (key != std::string(g) + "_max") ctx += std::string(g) + "_max: [1e6, 1e6, 1e6], ";
+    }
+    if (key != "action_min") ctx += "action_min: -1e6, ";
+    if (key != "action_max") ctx += "action_max: 1e6, ";
+    return ctx;
+  });
 }
 
 TEST(SimScenario, OlderKeysStillRead) {
@@ -348,4 +361,51 @@ TEST(SimScenario, RegisterPresetAtRunTime) {
   EXPECT_FALSE(load_scenario_string("sim: test_bad_dt\n", "s.yaml", c, err));
   EXPECT_FALSE(register_preset("gizmo", "x", "{}", "", err));
   EXPECT_NE(err.find("kind: expected one of sim, env, robot"), std::string::npos) << err;
+}
+
+TEST(SimScenario, EverySensorRowIsReachableUnderItsOwnName) {
+  // Each row of the lidar / ToF, camera and IMU schemas: a valid value under its key reaches the
+  // sensor's config; a value out of range is refused naming sensors[0].key. `context` widens the
+  // other side of each min / max pair so the row's own value keeps the rules between fields.
+  const auto ray_context = [](const std::string& key, bool lidar) {
+    std::string ctx;
+    const std::pair<const char*, const char*> pairs[] = {{"min_range_m", "0"}, {"max_range_m", "1e4"}, {"horizontal_fov_deg_min", "-180"},
+                                                         {"horizontal_fov_deg_max", "180"}, {"vertical_fov_deg_min", "-90"},
+                                                         {"vertical_fov_deg_max", "90"}, {"min_translation_b_m", "[-100, -100, -100]"},
+                                                         {"max_translation_b_m", "[100, 100, 100]"}, {"min_euler_deg", "[-360, -360, -360]"},
+                                                         {"max_euler_deg", "[360, 360, 360]"}};
+    for (const auto& p : pairs)
+      if (key != p.first && (lidar || std::string(p.first).find("fov_deg_m") == std::string::npos)) ctx += std::string(p.first) + ": " + p.second + ", ";
+    return ctx;
+  };
+  const auto rows = [&](const Schema<RaySensorFields>& sc, const char* preset, bool lidar) {
+    for (std::size_t k = 0; k < sc.count; ++k) {
+      const Field<RaySensorFields>& f = sc.fields[k];
+      double expect = 0;
+      const std::string text = std::string("sensors: [{name: ") + preset + ", " + ray_context(f.key, lidar) + f.key + ": " + valid_yaml(f, expect) + "}]\n";
+      WorldConfig c;
+      std::string err;
+      ASSERT_TRUE(load_scenario_string(text, "s.yaml", c, err)) << text << err;
+      expect_field(f, ray_sensor_fields(c.robot.sensors[0]), expect, text);
+      if (f.type == FieldType::real_number || (f.type == FieldType::integer && f.hi >= f.lo)) {
+        const std::string bad_text = std::string("sensors: [{name: ") + preset + ", " + f.key + ": 1e12}]\n";
+        EXPECT_NE(error_of(bad_text).find(std::string("sensors[0].") + f.key + ": expected"), std::string::npos) << bad_text;
+      }
+    }
+  };
+  rows(lidar_sensor_schema(), "vl53l5cx", true);
+  rows(camera_sensor_schema(), "d455", false);
+  const Schema<ImuSensorFields>& imu = imu_sensor_schema();
+  for (std::size_t k = 0; k < imu.count; ++k) {
+    const Field<ImuSensorFields>& f = imu.fields[k];
+    double expect = 0;
+    std::string ctx;
+    if (std::string(f.key) != "misalignment_min_deg") ctx += "misalignment_min_deg: [-180, -180, -180], ";
+    if (std::string(f.key) != "misalignment_max_deg") ctx += "misalignment_max_deg: [180, 180, 180], ";
+    const std::string text = "sensors: [{name: bmi088, " + ctx + f.key + ": " + valid_yaml(f, expect) + "}]\n";
+    WorldConfig c;
+    std::string err;
+    ASSERT_TRUE(load_scenario_string(text, "s.yaml", c, err)) << text << err;
+    expect_field(f, imu_sensor_fields(c.robot.sensors[0]), expect, text);
+  }
 }

@@ -123,10 +123,6 @@ TEST(SimUrdf, BadInputErrorsNameFileAndElement) {
   expect_error("badmass.urdf", robot_xml("<inertial><mass value=\"heavy\"/></inertial>"),
                "link[base_link]/inertial/mass@value: expected a finite number, got \"heavy\"");
   expect_error("massless.urdf", robot_xml(""), "link[base_link]/inertial/mass: the robot has no mass");
-  expect_error("offset.urdf",
-               robot_xml("<inertial><origin xyz=\"0.1 0 0\"/><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" "
-                         "iyz=\"0\" izz=\"1\"/></inertial>"),
-               "link[base_link]/inertial/origin: the centre of mass is at (0.1, 0, 0) m");
   expect_error("products.urdf",
                robot_xml("<inertial><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0.2\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial>"),
                "link[base_link]/inertial/inertia: products of inertia");

@@ -11,6 +11,7 @@
 #include "kestrel/robots/multirotor.hpp"
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/controllers/controller.hpp"
+#include "kestrel/controllers/lee.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
 #include "kestrel/kernel/types.hpp"
 #include "kestrel/sensors/imu.hpp"
@@ -172,11 +173,22 @@ struct RobotConfig {
   std::vector<SensorConfig> sensors;  // none by default: the default run renders nothing
 };
 
-/// Controller config: registry name -> kind; gains come from the robot (mass, inertia).
+/// Controller config: registry name -> kind, and the Lee family's parameters (LeeParams: gain
+/// ranges, yaw-rate limit, action clip; mass, inertia and gravity come from the robot and the sim).
+/// Defaults: Aerial Gym's lee_controller_config (lee_params_base_quadrotor). The nominal gain of
+/// each axis is the midpoint of [min, max] (what flies unless randomize_gains draws per reset); a
+/// scenario's `k_pos: [x, y, z]` sets min = max (a fixed gain). A base_rov airframe keeps the ROV
+/// preset (lee_params_rov).
 struct ControllerConfig {
   std::string name = "lee_position_control";
   ControllerKind kind = ControllerKind::lee_position;
   bool randomize_gains = false;
+  Vec3 k_pos_min = lee_gain_ranges_default().min.k_pos, k_pos_max = lee_gain_ranges_default().max.k_pos;  // (m/s^2) per m
+  Vec3 k_vel_min = lee_gain_ranges_default().min.k_vel, k_vel_max = lee_gain_ranges_default().max.k_vel;  // (m/s^2) per m/s
+  Vec3 k_rot_min = lee_gain_ranges_default().min.k_rot, k_rot_max = lee_gain_ranges_default().max.k_rot;  // N m per unit of e_R
+  Vec3 k_angvel_min = lee_gain_ranges_default().min.k_angvel, k_angvel_max = lee_gain_ranges_default().max.k_angvel;  // N m per rad/s
+  real max_yaw_rate_rad_s = kPi / 3;  // LeeParams::max_yaw_rate_radps
+  real action_min = -10, action_max = 10;  // every action component clipped to [min, max]
 };
 
 /// Task: what actions the robots get and how success is measured.
@@ -226,6 +238,23 @@ struct NavigationConfig {
   NavigationRewardParams reward;
 };
 
+/// position_setpoint_task's reward constants (task.reward): Aerial Gym's position_setpoint_task
+/// compute_reward, d = |target - position|, tilt = |1 - up_z|, s = |body rates|:
+///   pos = pos_reward_magnitude_1 exp(-pos_reward_exponent_1 d^2) + pos_reward_magnitude_2 exp(-pos_reward_exponent_2 d^2)
+///   dist = (distance_reward_offset_m - d) / distance_reward_divisor_m
+///   up = up_reward_magnitude / (up_reward_offset + tilt^2), spin = spin_reward_magnitude / (1 + s^2)
+///   reward = pos + dist + pos (up + spin); crash_reward where crashed or d > crash_distance_m.
+/// Evaluated in float32; the defaults reproduce the reference bit for bit.
+struct PositionSetpointRewardParams {
+  real pos_reward_magnitude_1 = 3.0f, pos_reward_exponent_1 = 8.0f;
+  real pos_reward_magnitude_2 = 2.0f, pos_reward_exponent_2 = 4.0f;
+  real distance_reward_offset_m = 20.0f, distance_reward_divisor_m = 40.0f;
+  real up_reward_magnitude = 0.2f, up_reward_offset = 0.1f;
+  real spin_reward_magnitude = 3.0f;
+  real crash_distance_m = 8.0f;
+  real crash_reward = -20.0f;
+};
+
 struct TaskConfig {
   std::string name = "position_setpoint";
   TaskKind kind = TaskKind::position_setpoint;
@@ -250,6 +279,7 @@ struct TaskConfig {
   real setpoint_speed_m_s = 0;
   CurriculumConfig curriculum;  // read by the tasks with a curriculum (navigation_task)
   NavigationConfig navigation;  // read by navigation_task
+  PositionSetpointRewardParams reward;  // read by position_setpoint_task (navigation_task: navigation.reward)
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env
 

@@ -29,6 +29,7 @@ constexpr int kMaxPhysicsStepsPerEnvStep = 1000;   // env.num_physics_steps_per_
 constexpr int kMaxLatencyPhysicsSteps = 1000;      // env.max_latency_physics_steps
 constexpr int kMaxThreads = 1024;                  // threads, kestrel run --threads
 constexpr int kMaxSensorEveryEnvSteps = 1 << 20;   // sensors[].every
+constexpr int kMaxSensorSide = 4096;               // sensors[].height, .width (pixels per side)
 constexpr int kMaxNumWaves = 1000;                 // env.terrain.num_waves (work per height sample)
 constexpr int kMaxMeasuredHeightPoints = 1 << 16;  // env.terrain.measured_points_x x _y, per robot
 constexpr int kMaxAssetSemanticId = 32767;         // env.assets.<class>.semantic_id (stored in 16 bits)

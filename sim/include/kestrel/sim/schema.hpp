@@ -53,6 +53,45 @@ struct Schema {
   std::size_t num_structural;
 };
 
+/// The scenario's flat view of a ray sensor (`sensors: [{name, every, max_range_m, ...}]`): one key
+/// per parameter of sensors::LidarParams / CameraParams and of their range, output, mount and noise
+/// parts (the members' names, units added where the member has none: range.max_range ->
+/// max_range_m, noise.a -> noise_a). Read from a preset by ray_sensor_fields, written back by
+/// set_ray_sensor_fields; the lidar rows and the camera rows are two schemas over this one struct.
+struct RaySensorFields {
+  int every_env_steps = 1;
+  int height = 64, width = 512;
+  real horizontal_fov_deg_min = -180, horizontal_fov_deg_max = 180;  // lidar
+  real vertical_fov_deg_min = 0, vertical_fov_deg_max = 90;          // lidar
+  real horizontal_fov_deg = 87;                                      // camera
+  bool calculate_depth = true;                                       // camera
+  real min_range_m = 0.5_r, max_range_m = 20;
+  bool normalize_range = false;
+  real far_out_of_range_value = -1, near_out_of_range_value = -1;
+  bool return_pointcloud = false, pointcloud_in_world_frame = false, segmentation_camera = true;
+  Vec3 nominal_position_b_m = Vec3::Zero(), nominal_euler_deg = Vec3::Zero();
+  bool randomize_placement = false;
+  Vec3 min_translation_b_m = Vec3::Zero(), max_translation_b_m = Vec3::Zero();
+  Vec3 min_euler_deg = Vec3::Zero(), max_euler_deg = Vec3::Zero();
+  bool fixed_pose_at_range_mean = false;
+  bool enable_sensor_noise = true;
+  sensors::NoiseParams::Model noise_model = sensors::NoiseParams::Model::none;
+  real noise_a = 0, noise_b = 0, noise_c = 0, noise_mean_offset_m = 0;
+  real std_dev_multiplier = 0.01_r, pixel_dropout_prob = 0;
+};
+/// The IMU's scenario view: sensors::ImuParams' members (gravity_w excepted: the sim's) and every.
+struct ImuSensorFields : sensors::ImuParams {
+  int every_env_steps = 1;
+};
+/// A sensor's parameters as the flat fields of its kind, and back (every_env_steps included).
+RaySensorFields ray_sensor_fields(const SensorConfig& c);
+void set_ray_sensor_fields(const RaySensorFields& f, SensorConfig& c);
+ImuSensorFields imu_sensor_fields(const SensorConfig& c);
+void set_imu_sensor_fields(const ImuSensorFields& f, SensorConfig& c);
+/// The checks between fields of a sensor (min < max range, fov min <= max, translation and Euler
+/// ranges ordered). False and "where.key: ..." naming the field.
+[[nodiscard]] bool check_sensor_cross_fields(const SensorConfig& c, const std::string& where, std::string& error);
+
 const Schema<SimParams>& sim_schema();
 const Schema<SimulatorConfig>& simulator_schema();
 const Schema<EnvConfig>& env_schema();
@@ -65,6 +104,10 @@ const Schema<TaskConfig>& task_schema();
 const Schema<CurriculumConfig>& curriculum_schema();
 const Schema<NavigationConfig>& navigation_schema();
 const Schema<NavigationRewardParams>& navigation_reward_schema();
+const Schema<PositionSetpointRewardParams>& position_setpoint_reward_schema();
+const Schema<RaySensorFields>& lidar_sensor_schema();   // lidar and ToF presets
+const Schema<RaySensorFields>& camera_sensor_schema();  // depth cameras
+const Schema<ImuSensorFields>& imu_sensor_schema();
 
 /// The same ranges for a config built in code (C++, tests) rather than read from a file: every
 /// field of every schema within its allowed values, vectors finite, ranges ordered; assets and

@@ -186,6 +186,9 @@ void min_pool_image(const RangeImage& img, int rows, int cols, float* out);
 /// reward moves by at most an ulp of d; tests/sim/tasks/task_test.cpp checks both within 1e-5).
 float position_setpoint_reward(const float pos_error[3], const float quat_xyzw[4], const float body_angvel[3],
                                float curriculum_multiplier, std::uint8_t& crash);
+/// The same with the constants of `p` (task.reward; the defaults give the same bits as above).
+float position_setpoint_reward(const float pos_error[3], const float quat_xyzw[4], const float body_angvel[3],
+                               float curriculum_multiplier, std::uint8_t& crash, const PositionSetpointRewardParams& p);
 
 /// target - position (world frame) rotated into the vehicle frame (inverse rotation by the yaw-only
 /// quaternion of `quat_xyzw`), as the reference does before calling the reward.
