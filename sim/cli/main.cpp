@@ -1,6 +1,9 @@
 // kestrel: the desktop harness's command line.
 //   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR [--image-env E] [--max-memory-gib G]
-//   (with sensors in the scenario, DIR also gets env E's sensor images: sensor_<name>_*.png)
+//   Every run (scenario, --task, either backend) writes to DIR (default kestrel_out): summary.txt
+//   (the printed summary) and trajectory.csv (the first 6 environments' robot 0 per env-step); on
+//   the rigid simulator also envs.csv (per-environment final state and counters), trajectory.png
+//   (top view) and, with sensors in the scenario, env E's sensor images: sensor_<name>_*.png.
 //   kestrel list
 // With no scenario, `run` uses the embedded default (1024 quadrotors, position setpoints, forest).
 #include <sys/stat.h>
@@ -20,6 +23,7 @@
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/schema.hpp"
 #include "kestrel/sim/scenario.hpp"
@@ -40,6 +44,8 @@ int usage() {
   std::fprintf(stderr,
                "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
                "                   [--task ID] [--policy scripted|zero] [--max-memory-gib G]\n"
+               "         --out DIR (default kestrel_out), every run: summary.txt, trajectory.csv; rigid simulator also\n"
+               "                   envs.csv, trajectory.png and env E's sensor images (sensor_<name>_*.png)\n"
                "       kestrel list\n"
                "       kestrel schema      (the scenario reference: every key, unit, range and default)\n");
   return 2;
@@ -63,7 +69,8 @@ bool parse_long(const char* s, long long lo, long long hi, long long& out) {
 // goal, dodging what its pooled image sees; goal_box_through_gap: waypoints through the gap) or
 // zero actions; the summary reports the episodes, their terminations, the success rate, the mean
 // episode reward and the reward trend (mean step reward over the first and the last quarter).
-int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, long long steps, bool scripted) {
+int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, long long steps, bool scripted,
+             const std::string& out_dir, long long image_env) {
   std::string err;
   std::unique_ptr<Task> task = make_task(cfg, backend, err);
   if (!task) {
@@ -77,11 +84,18 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
                  label.c_str(), task->name(), cfg.controller.name.c_str());
     return 1;
   }
-  std::printf("kestrel run: %s\n", label.c_str());
-  std::printf("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
-              ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), cfg.controller.name.c_str(),
-              cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
-  std::printf("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
+  World* world = rigid_world(task->simulator());  // nullptr on planar
+  if (world != nullptr) world->enable_trace(6, static_cast<int>(std::min<long long>(steps, 0x7fffffff)));
+  // Trajectory of robot 0 of the first environments (x, y, z per task step), on every backend.
+  const Simulator& sim = task->simulator();
+  const int trace_envs = std::min(6, n);
+  std::vector<real> trace(static_cast<std::size_t>(trace_envs) * static_cast<std::size_t>(steps) * 3, 0);
+  RunReport rep;
+  rep.say("kestrel run: %s\n", label.c_str());
+  rep.say("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
+          ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), cfg.controller.name.c_str(),
+          cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
+  rep.say("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
   double reward_sum = 0, first_quarter = 0, last_quarter = 0;
   const long long quarter = std::max(1LL, steps / 4);
   const auto t0 = std::chrono::steady_clock::now();
@@ -93,24 +107,69 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
     reward_sum += r;
     if (s < quarter) first_quarter += r;
     if (s >= steps - quarter) last_quarter += r;
+    for (int e = 0; e < trace_envs; ++e) {
+      const std::size_t i = static_cast<std::size_t>(e) * static_cast<std::size_t>(sim.robots_per_env());
+      real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(s)) * 3];
+      for (int k = 0; k < 3; ++k) t[k] = sim.base_pos_w()[3 * i + static_cast<std::size_t>(k)];
+    }
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const TaskInfos& in = task->infos();
-  std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(steps) * n / secs);
-  std::printf("  episodes %" PRIu64 " (terminated %" PRIu64 ", truncated %" PRIu64 "), mean episode reward %.3f, "
-              "mean step reward %.4f\n", in.episodes, in.terminations, in.truncations, in.mean_episode_reward(),
-              reward_sum / (static_cast<double>(steps) * n));
-  std::printf("  terminations: crashes %" PRIu64 ", successes %" PRIu64 "; success rate %.1f%%\n", in.crashes, in.successes,
-              100.0 * in.success_rate());
-  std::printf("  reward trend: mean step reward %.4f over the first quarter -> %.4f over the last quarter (%s)\n",
-              first_quarter / (static_cast<double>(quarter) * n), last_quarter / (static_cast<double>(quarter) * n),
-              // A change under 0.1 % of the first quarter's magnitude (or 1e-3 per step) is called flat.
-              std::fabs(last_quarter - first_quarter) <= 1e-3 * std::max(std::fabs(first_quarter), static_cast<double>(quarter) * n)
-                  ? "flat"
-                  : last_quarter > first_quarter ? "rising" : "falling");
+  std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(steps) * n / secs);  // not in summary.txt: varies
+  rep.say("  episodes %" PRIu64 " (terminated %" PRIu64 ", truncated %" PRIu64 "), mean episode reward %.3f, "
+          "mean step reward %.4f\n", in.episodes, in.terminations, in.truncations, in.mean_episode_reward(),
+          reward_sum / (static_cast<double>(steps) * n));
+  rep.say("  terminations: crashes %" PRIu64 ", successes %" PRIu64 "; %s\n", in.crashes, in.successes,
+          success_rate_text(in.episodes, in.fallback_episodes, in.successes).c_str());
+  const WorldSummary ss = sim.summary();
+  const std::string fb = placement_fallback_text(
+      cfg.env.name, ss.placement_fallbacks, ss.placements,
+      world != nullptr ? static_cast<double>(world->model().robot_bound_radius_m + cfg.task.clearance_m) : -1.0, cfg.task.line_of_sight);
+  if (!fb.empty()) rep.say("  %s\n", fb.c_str());
+  rep.say("  reward trend: mean step reward %.4f over the first quarter -> %.4f over the last quarter (%s)\n",
+          first_quarter / (static_cast<double>(quarter) * n), last_quarter / (static_cast<double>(quarter) * n),
+          // A change under 0.1 % of the first quarter's magnitude (or 1e-3 per step) is called flat.
+          std::fabs(last_quarter - first_quarter) <= 1e-3 * std::max(std::fabs(first_quarter), static_cast<double>(quarter) * n)
+              ? "flat"
+              : last_quarter > first_quarter ? "rising" : "falling");
   if (std::string(task->name()) == "navigation_task")
-    std::printf("  curriculum level %d (%" PRIu64 " changes)\n", in.curriculum_level, in.curriculum_changes);
-  std::printf("state hash: %016" PRIx64 "\n", task->state_hash());
+    rep.say("  curriculum level %d (%" PRIu64 " changes)\n", in.curriculum_level, in.curriculum_changes);
+  // --out: the same files as a scripted run of the same backend (see the usage).
+  ::mkdir(out_dir.c_str(), 0755);
+  std::vector<std::string> wrote;
+  const std::string tpath = out_dir + "/trajectory.csv";
+  if (world != nullptr) {
+    if (!write_trajectory_csv(*world, tpath, err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
+        !write_trajectory_png(*world, out_dir + "/trajectory.png", err) ||
+        (world->num_sensors() > 0 && !write_sensor_pngs(*world, static_cast<int>(std::min<long long>(image_env, n - 1)), out_dir, wrote, err))) {
+      std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+      return 1;
+    }
+    wrote.insert(wrote.begin(), {tpath, out_dir + "/envs.csv", out_dir + "/trajectory.png"});
+  } else {
+    std::FILE* f = std::fopen(tpath.c_str(), "w");
+    if (f == nullptr) {
+      std::fprintf(stderr, "kestrel: %s: cannot write\n", tpath.c_str());
+      return 1;
+    }
+    std::fprintf(f, "env,step,x_m,y_m,z_m\n");
+    for (int e = 0; e < trace_envs; ++e)
+      for (long long k = 0; k < steps; ++k) {
+        const real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(k)) * 3];
+        std::fprintf(f, "%d,%lld,%.6g,%.6g,%.6g\n", e, k, static_cast<double>(t[0]), static_cast<double>(t[1]), static_cast<double>(t[2]));
+      }
+    std::fclose(f);
+    wrote.insert(wrote.begin(), tpath);
+  }
+  char hash[64];
+  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", task->state_hash());
+  rep.keep(hash);
+  if (!rep.write(out_dir + "/summary.txt", err)) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
+  for (const std::string& p : wrote) std::printf("  wrote %s\n", p.c_str());
+  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
   return 0;
 }
 
@@ -211,20 +270,21 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
     return 1;
   }
   world->enable_trace(6, static_cast<int>(r.steps));
-  std::printf("kestrel run: %s\n", label.c_str());
-  std::printf("  sim %s (dt %.4g s), env %s, robot %s x%d, controller %s, task %s\n", cfg.sim.name.c_str(),
+  RunReport rep;
+  rep.say("kestrel run: %s\n", label.c_str());
+  rep.say("  sim %s (dt %.4g s), env %s, robot %s x%d, controller %s, task %s\n", cfg.sim.name.c_str(),
               static_cast<double>(cfg.sim.dt_s), cfg.env.name.c_str(), cfg.robot.name.c_str(), cfg.robot.robots_per_env,
               cfg.controller.name.c_str(), cfg.task.name.c_str());
-  std::printf("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
-  std::printf("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
+  rep.say("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
+  rep.say("  envs %d, obstacles/env <= %d, threads %d, seed %" PRIu64 ", steps %lld\n", world->num_envs(),
               world->obstacle_capacity(), world->num_threads(), cfg.seed, r.steps);
   for (int k = 0; k < world->num_sensors(); ++k) {
     const SensorConfig& sc = world->sensor_config(k);
-    if (sc.kind == SensorKind::imu) std::printf("  sensor %s: IMU, every physics step\n", sc.name.c_str());
-    else std::printf("  sensor %s: %s %d x %d, every %d env-step(s)\n", sc.name.c_str(), sc.kind == SensorKind::camera ? "camera" : "lidar",
+    if (sc.kind == SensorKind::imu) rep.say("  sensor %s: IMU, every physics step\n", sc.name.c_str());
+    else rep.say("  sensor %s: %s %d x %d, every %d env-step(s)\n", sc.name.c_str(), sc.kind == SensorKind::camera ? "camera" : "lidar",
                      world->sensor_height(k), world->sensor_width(k), sc.every_env_steps);
   }
-  std::printf("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
+  rep.say("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
   // Progress bar on long runs (stderr, so the summary on stdout stays clean to compare).
   const bool bar = !r.quiet && static_cast<double>(r.steps) * world->num_envs() >= 2e6;
@@ -245,20 +305,25 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = world->summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
-  std::printf("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes,
-              s.resets, s.timeouts, s.out_of_bounds);
-  // Success is counted over every finished episode (a crash or an exit ends one unsuccessfully),
-  // not only over the timed-out ones.
-  std::printf("  episodes %" PRIu64 ": success rate %.1f%% (within %.2f m of the target at timeout), crash rate %.1f%%\n",
-              s.episodes_done,
-              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.successes) / static_cast<double>(s.episodes_done) : 0.0,
-              static_cast<double>(cfg.task.success_radius_m),
-              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done) : 0.0);
-  std::printf("  tracking error (|setpoint - position|): mean %.3f m; distance to target at episode end %.3f m; "
-              "final mean distance to target %.3f m\n",
-              s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
-  if (s.placement_fallbacks > 0)
-    std::printf("  placements without a clear start/target/path: %" PRIu64 "\n", s.placement_fallbacks);
+  rep.say("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes,
+          s.resets, s.timeouts, s.out_of_bounds);
+  // Success is counted over every finished real episode (a crash or an exit ends one
+  // unsuccessfully), not only over the timed-out ones; a fallback episode hovers at its start and is
+  // counted apart, never as a success (issue 19).
+  char crash_rate[32] = "n/a (0 episodes)";
+  if (s.episodes_done > 0)
+    std::snprintf(crash_rate, sizeof crash_rate, "%.1f%%", 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done));
+  rep.say("  episodes %" PRIu64 ": %s (within %.2f m of the target at timeout), crash rate %s\n", s.episodes_done,
+          success_rate_text(s.episodes_done, s.fallback_episodes, s.successes).c_str(),
+          static_cast<double>(cfg.task.success_radius_m), crash_rate);
+  rep.say("  tracking error (|setpoint - position|): mean %.3f m; distance to target at episode end %.3f m; "
+          "final mean distance to target %.3f m\n",
+          s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
+  const std::string fb = placement_fallback_text(
+      cfg.env.name, s.placement_fallbacks,
+      s.placements,
+      static_cast<double>(world->model().robot_bound_radius_m + cfg.task.clearance_m), cfg.task.line_of_sight);
+  if (!fb.empty()) rep.say("  %s\n", fb.c_str());
   const std::string& out_dir = r.out_dir;
   ::mkdir(out_dir.c_str(), 0755);
   if (!write_trajectory_csv(*world, out_dir + "/trajectory.csv", err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
@@ -275,7 +340,14 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
     }
     for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), r.image_env);
   }
-  std::printf("state hash: %016" PRIx64 "\n", world->state_hash());
+  char hash[64];
+  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", world->state_hash());
+  rep.keep(hash);
+  if (!rep.write(out_dir + "/summary.txt", err)) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
+  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
   return 0;
 }
 
@@ -294,7 +366,7 @@ int run(int argc, char** argv) {
     return 1;
   }
   if (backend == Backend::planar) {
-    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted);
+    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
     std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
     if (!sim) {
       std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
@@ -307,7 +379,7 @@ int run(int argc, char** argv) {
                  label.c_str());
     return 1;
   }
-  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted);
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
   return run_world(cfg, r, label);
 }
 

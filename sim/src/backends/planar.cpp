@@ -197,6 +197,7 @@ struct Env {
   Vec3 lower = Vec3::Zero(), upper = Vec3::Zero();
   int episode_step = 0, episodes_since_layout = 0;
   std::uint32_t layout_generation = 0;
+  bool episode_fallback = false;  // a robot of this episode was placed by a fallback (never a success)
   EnvStats stats;
 };
 
@@ -497,6 +498,10 @@ class PlanarSimulator final : public Simulator {
     return n;
   }
 
+  bool placement_fallback(int env) const override {
+    return env >= 0 && env < num_envs_ && envs_[static_cast<std::size_t>(env)].episode_fallback;
+  }
+
   WorldSummary summary() const override {
     WorldSummary s;
     double err = 0, end_dist = 0, final_dist = 0;
@@ -786,13 +791,18 @@ class PlanarSimulator final : public Simulator {
       scene::layout_drawn(ev.layout_generation, ev.episodes_since_layout);
     }
     ev.episode_step = 0;
+    ev.episode_fallback = false;
     for (int r = 0; r < robots_per_env_; ++r) {
       const std::size_t i = static_cast<std::size_t>(ei * robots_per_env_ + r);
       // Clearance in the plane: x and y of each candidate against the used slots.
       const scene::Placement place = scene::place_robot(
           cfg_, ev.lower, ev.upper, rng, [&](const Vec3& p) { return clear_point(ev, p[0], p[1]); },
           [&](const Vec3& a, const Vec3& b) { return clear_segment(ev, a[0], a[1], b[0], b[1]); });
-      if (place.fallback) ++ev.stats.placement_fallbacks;
+      ++ev.stats.placements;
+      if (place.fallback) {
+        ++ev.stats.placement_fallbacks;
+        ev.episode_fallback = true;
+      }
       const real yaw = rng.uniform(-cfg_.robot.max_init_yaw_rad, cfg_.robot.max_init_yaw_rad);
       const Vec3& start = place.start_w;
       const Vec3& target = place.target_w;
@@ -966,13 +976,14 @@ class PlanarSimulator final : public Simulator {
       ++es.timeouts;
       bool ok = true;
       for (int r = 0; r < robots_per_env_; ++r) ok = ok && within_success_radius(distance_to_target(ei, r), cfg_.task.success_radius_m);
-      es.successes += ok ? 1u : 0u;
+      es.successes += ok && !ev.episode_fallback ? 1u : 0u;  // a fallback episode hovers: never a success
     }
     if (out) ++es.out_of_bounds;
     const bool done = timeout || out || (any_crash && cfg_.env.reset_on_collision);
     reset_buf_[static_cast<std::size_t>(ei)] = done ? 1 : 0;
     if (done) {
       ++es.episodes_done;
+      if (ev.episode_fallback) ++es.fallback_episodes;
       real d = 0;
       for (int r = 0; r < robots_per_env_; ++r) d += distance_to_target(ei, r);
       es.final_distance_sum_m += static_cast<double>(d) / robots_per_env_;

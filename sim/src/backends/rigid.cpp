@@ -173,6 +173,9 @@ class RigidSimulator final : public Simulator {
   void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const override { world_->lower_upper_bounds(env, lower_w, upper_w); }
 
   WorldSummary summary() const override { return world_->summary(); }
+  bool placement_fallback(int env) const override {
+    return env >= 0 && env < num_envs() && world_->data().episode_fallback[static_cast<std::size_t>(env)] != 0;
+  }
 
   std::uint64_t state_hash() const override { return world_->state_hash(); }
 

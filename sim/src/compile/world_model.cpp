@@ -212,6 +212,7 @@ void make_world_data(const WorldModel& m, WorldData& d) {
   d.latency.assign(ne, 0);
   d.episode_step.assign(ne, 0);
   d.episode_ended.assign(ne, 0);
+  d.episode_fallback.assign(ne, 0);
   d.num_obstacles.assign(ne, 0);
   d.episodes_since_layout.assign(ne, 0);
   d.layout_generation.assign(ne, 0);

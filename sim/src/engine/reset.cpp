@@ -86,12 +86,17 @@ void reset_env(const WorldModel& m, WorldData& d, int env) {
                       : 0;
   d.episode_step[env] = 0;
   const bool hover_task = m.cfg.task.kind == TaskKind::hover;
+  d.episode_fallback[static_cast<std::size_t>(env)] = 0;
   for (int r = 0; r < m.robots_per_env; ++r) {
     const std::size_t i = m.index(env, r);
     const scene::Placement place = scene::place_robot(
         m.cfg, d.lower_w[env], d.upper_w[env], rng, [&](const Vec3& p) { return clear_point(m, d, env, p); },
         [&](const Vec3& a, const Vec3& b) { return clear_segment(m, d, env, a, b); });
-    if (place.fallback) ++d.stats[env].placement_fallbacks;  // hovers at a clear start rather than fly into an obstacle
+    ++d.stats[env].placements;
+    if (place.fallback) {  // hovers at a clear start rather than fly into an obstacle: not a real episode
+      ++d.stats[env].placement_fallbacks;
+      d.episode_fallback[static_cast<std::size_t>(env)] = 1;
+    }
     RigidBodyState st;
     st.position_w = place.start_w;
     const real yaw = rng.uniform(-m.cfg.robot.max_init_yaw_rad, m.cfg.robot.max_init_yaw_rad);

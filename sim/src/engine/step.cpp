@@ -244,12 +244,14 @@ void env_step_end(const WorldModel& m, WorldData& d, int env) {
     bool ok = true;
     for (int r = 0; r < m.robots_per_env; ++r)
       ok = ok && within_success_radius((d.target_w[m.index(env, r)] - d.state[m.index(env, r)].position_w).norm(), m.cfg.task.success_radius_m);
-    es.successes += ok ? 1u : 0u;
+    // A fallback episode (target = start) hovers: never a success (summary.hpp).
+    es.successes += ok && d.episode_fallback[static_cast<std::size_t>(env)] == 0 ? 1u : 0u;
   }
   if (out) ++es.out_of_bounds;
   if (timeout || out || (any_crash && m.cfg.env.reset_on_collision)) {
     d.episode_ended[static_cast<std::size_t>(env)] = 1;  // what a Simulator's reset_buf reports
     ++es.episodes_done;
+    if (d.episode_fallback[static_cast<std::size_t>(env)] != 0) ++es.fallback_episodes;
     real dist = 0;
     for (int r = 0; r < m.robots_per_env; ++r) dist += (d.target_w[m.index(env, r)] - d.state[m.index(env, r)].position_w).norm();
     es.final_distance_sum_m += static_cast<double>(dist) / m.robots_per_env;

@@ -3,7 +3,9 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cinttypes>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <vector>
 
@@ -216,6 +218,68 @@ bool write_sensor_pngs(const World& world, int env, const std::string& dir, std:
     if (!write_png_rgb(range_path, W, H, grey.data(), error) || !write_png_rgb(seg_path, W, H, seg.data(), error)) return false;
     written.push_back(range_path);
     written.push_back(seg_path);
+  }
+  return true;
+}
+
+std::string success_rate_text(std::uint64_t episodes, std::uint64_t fallback_episodes, std::uint64_t successes) {
+  char buf[256];
+  const std::uint64_t real = episodes >= fallback_episodes ? episodes - fallback_episodes : 0;
+  if (episodes == 0) return "success rate n/a (0 episodes)";
+  if (fallback_episodes == 0) {
+    std::snprintf(buf, sizeof buf, "success rate %.1f%%", 100.0 * static_cast<double>(successes) / static_cast<double>(episodes));
+  } else if (real == 0) {
+    std::snprintf(buf, sizeof buf, "success rate n/a (0 real episodes; %" PRIu64 " placement fallbacks not counted)", fallback_episodes);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "success rate %.1f%% (%" PRIu64 " of %" PRIu64 " real episodes; %" PRIu64 " placement fallbacks not counted)",
+                  100.0 * static_cast<double>(successes) / static_cast<double>(real), successes, real, fallback_episodes);
+  }
+  return buf;
+}
+
+std::string placement_fallback_text(const std::string& env_name, std::uint64_t fallbacks, std::uint64_t placements,
+                                    double robot_bound_plus_clearance_m, bool line_of_sight) {
+  if (fallbacks == 0) return "";
+  char buf[768];
+  const double share = placements > 0 ? 100.0 * static_cast<double>(fallbacks) / static_cast<double>(placements) : 100.0;
+  int n = std::snprintf(buf, sizeof buf,
+                        "placement fallbacks: %" PRIu64 " of %" PRIu64 " placements (%.1f%%) found no clear start/target%s pair "
+                        "and hover at their start (not counted as successes)",
+                        fallbacks, placements, share, line_of_sight ? "/path" : "");
+  char sphere[64] = "the robot's bounding sphere plus task.clearance_m";
+  if (robot_bound_plus_clearance_m > 0) std::snprintf(sphere, sizeof sphere, "a %.2f m sphere", robot_bound_plus_clearance_m);
+  if (share > 5.0 && n > 0 && static_cast<std::size_t>(n) < sizeof buf)
+    std::snprintf(buf + n, sizeof buf - static_cast<std::size_t>(n),
+                  "\n  warning: env %s is too dense for this placement rule (%s%s); raise task.placement_attempts "
+                  "(<= 64), lower task.clearance_m%s, or use an emptier environment",
+                  env_name.c_str(), sphere,
+                  line_of_sight ? " swept along a straight line from the start box to the target box" : " at start and target",
+                  line_of_sight ? ", set task.line_of_sight: false (then give the controller obstacle avoidance)" : "");
+  return buf;
+}
+
+void RunReport::say(const char* fmt, ...) {
+  char buf[2048];
+  va_list ap;
+  va_start(ap, fmt);
+  const int n = std::vsnprintf(buf, sizeof buf, fmt, ap);
+  va_end(ap);
+  if (n < 0) return;
+  std::fputs(buf, stdout);
+  text_ += buf;
+}
+
+bool RunReport::write(const std::string& path, std::string& error) const {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    error = path + ": cannot write";
+    return false;
+  }
+  const bool ok = std::fwrite(text_.data(), 1, text_.size(), f) == text_.size();
+  if (std::fclose(f) != 0 || !ok) {
+    error = path + ": cannot write";
+    return false;
   }
   return true;
 }

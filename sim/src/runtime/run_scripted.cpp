@@ -6,23 +6,25 @@
 #include <cinttypes>
 #include <cstdio>
 
+#include "kestrel/sim/output.hpp"
 #include "kestrel/sim/simulator.hpp"
 
 namespace kestrel::sim {
 
 int run_scripted(Simulator& sim, const std::string& label, long long steps, const std::string& out_dir, bool quiet) {
   const WorldConfig& cfg = sim.config();
-  std::printf("kestrel run: %s\n", label.c_str());
-  std::printf("  simulator %s, vehicle %s, controller %s (%d actions), env %s, robot %s x%d, dt %.4g s x %d\n",
+  RunReport rep;  // what is printed, also written to out_dir/summary.txt
+  rep.say("kestrel run: %s\n", label.c_str());
+  rep.say("  simulator %s, vehicle %s, controller %s (%d actions), env %s, robot %s x%d, dt %.4g s x %d\n",
               sim.backend_name(),
               sim.backend() == Backend::planar
                   ? (sim.ground_vehicle() ? "ground_vehicle" : "multirotor at fixed altitude")
                   : "3-D",
               sim.controller_name(), sim.action_dim(), cfg.env.name.c_str(), cfg.robot.name.c_str(), sim.robots_per_env(),
               static_cast<double>(sim.dt_s()), sim.decimation());
-  std::printf("  envs %d, threads %d, seed %" PRIu64 ", steps %lld", sim.num_envs(), sim.num_threads(), cfg.seed, steps);
-  if (sim.lidar_beams() > 0) std::printf(", 2-D lidar %d beams", sim.lidar_beams());
-  std::printf("\n");
+  rep.say("  envs %d, threads %d, seed %" PRIu64 ", steps %lld", sim.num_envs(), sim.num_threads(), cfg.seed, steps);
+  if (sim.lidar_beams() > 0) rep.say(", 2-D lidar %d beams", sim.lidar_beams());
+  rep.say("\n");
   std::vector<real> actions(static_cast<std::size_t>(sim.num_robots()) * static_cast<std::size_t>(sim.action_dim()), 0);
   // Trajectory of robot 0 of the first environments (x, y, yaw per env-step).
   const int trace_envs = std::min(6, sim.num_envs());
@@ -50,19 +52,25 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = sim.summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
-  std::printf("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes, s.resets,
-              s.timeouts, s.out_of_bounds);
-  std::printf("  episodes %" PRIu64 ": success rate %.1f%% (within %.2f m of the target at timeout), crash rate %.1f%%\n",
-              s.episodes_done,
-              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.successes) / static_cast<double>(s.episodes_done) : 0.0,
-              static_cast<double>(cfg.task.success_radius_m),
-              s.episodes_done > 0 ? 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done) : 0.0);
-  std::printf("  distance to target: mean over env-steps %.3f m; at episode end %.3f m; final mean %.3f m\n",
-              s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
+  rep.say("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes, s.resets,
+          s.timeouts, s.out_of_bounds);
+  // Successes over real episodes; fallback episodes (target = start) apart (issue 19).
+  char crash_rate[32] = "n/a (0 episodes)";
+  if (s.episodes_done > 0)
+    std::snprintf(crash_rate, sizeof crash_rate, "%.1f%%", 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done));
+  rep.say("  episodes %" PRIu64 ": %s (within %.2f m of the target at timeout), crash rate %s\n", s.episodes_done,
+          success_rate_text(s.episodes_done, s.fallback_episodes, s.successes).c_str(),
+          static_cast<double>(cfg.task.success_radius_m), crash_rate);
+  rep.say("  distance to target: mean over env-steps %.3f m; at episode end %.3f m; final mean %.3f m\n",
+          s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
   if (sim.backend() == Backend::planar)
-    std::printf("  Box2D allocations inside steps that overflowed the per-env arenas to the heap: %" PRIu64 "\n",
-                sim.step_heap_fallbacks());
-  if (s.placement_fallbacks > 0) std::printf("  placements without a clear start/target/path: %" PRIu64 "\n", s.placement_fallbacks);
+    rep.say("  Box2D allocations inside steps that overflowed the per-env arenas to the heap: %" PRIu64 "\n",
+            sim.step_heap_fallbacks());
+  const std::string fb = placement_fallback_text(
+      cfg.env.name, s.placement_fallbacks,
+      s.placements, -1.0,
+      cfg.task.line_of_sight);
+  if (!fb.empty()) rep.say("  %s\n", fb.c_str());
   ::mkdir(out_dir.c_str(), 0755);
   const std::string path = out_dir + "/trajectory.csv";
   if (std::FILE* f = std::fopen(path.c_str(), "w")) {
@@ -78,7 +86,15 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
     std::fprintf(stderr, "kestrel: %s: cannot write\n", path.c_str());
     return 1;
   }
-  std::printf("state hash: %016" PRIx64 "\n", sim.state_hash());
+  char hash[64];
+  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", sim.state_hash());
+  rep.keep(hash);
+  std::string err;
+  if (!rep.write(out_dir + "/summary.txt", err)) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
+  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
   return 0;
 }
 

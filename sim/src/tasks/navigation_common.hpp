@@ -40,7 +40,9 @@ struct EpisodeBook {
   int level = 0;
   int window_successes = 0, window_crashes = 0, window_timeouts = 0;
   /// Counts one ended episode (crash, else success, else timeout) in the infos and the window.
-  void count(bool crash, bool success, double episode_reward, TaskInfos& infos);
+  /// A fallback episode (target = start) is counted in infos.fallback_episodes, never as a success,
+  /// and stays out of the curriculum's window.
+  void count(bool crash, bool success, bool fallback, double episode_reward, TaskInfos& infos);
   /// After a window of check_after_episodes episodes: the next level (the reference's
   /// check_and_update_curriculum_level). True if the level moved.
   bool update_curriculum(const NavigationCurriculum& c, TaskInfos& infos);

@@ -132,10 +132,18 @@ void scripted_action(const float* o, const float* img, int rows, int cols, bool 
   for (int k = 0; k < 3; ++k) a[k] = (1.0f - s) * a[k] + s * dodge[best][k];
 }
 
-void EpisodeBook::count(bool crash, bool success, double episode_reward, TaskInfos& infos) {
+void EpisodeBook::count(bool crash, bool success, bool fallback, double episode_reward, TaskInfos& infos) {
   ++infos.episodes;
   infos.episode_reward_sum += episode_reward;
-  if (crash) {
+  if (fallback) {
+    ++infos.fallback_episodes;
+    if (crash) {
+      ++infos.terminations;
+      ++infos.crashes;
+    } else {
+      ++infos.truncations;
+    }
+  } else if (crash) {
     ++infos.terminations;
     ++infos.crashes;
     ++window_crashes;
@@ -238,7 +246,7 @@ class NavigationTask final : public Task {
       truncations_[i] = trunc ? 1 : 0;
       episode_reward_[i] += static_cast<double>(r);
       ended_[i] = (crash || trunc) ? 1 : 0;
-      if (ended_[i]) book_.count(crash, success, episode_reward_[i], infos_);
+      if (ended_[i]) book_.count(crash, success, sim_->placement_fallback(env), episode_reward_[i], infos_);
     }
     // Curriculum before the resets, as the reference updates it before post_reward_calculation_step:
     // the environments ending now get their next layout at the new level.

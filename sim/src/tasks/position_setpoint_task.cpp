@@ -112,6 +112,9 @@ class PositionSetpointTask final : public Task {
       ended_[i] = (crash || trunc) ? 1 : 0;
       if (!ended_[i]) continue;
       ++infos_.episodes;
+      // A fallback placement (target = start) hovers: counted apart, never a success.
+      const bool fallback = sim_->placement_fallback(env);
+      if (fallback) ++infos_.fallback_episodes;
       if (crash) {
         ++infos_.terminations;
         ++infos_.crashes;
@@ -120,7 +123,7 @@ class PositionSetpointTask final : public Task {
         // Success as Aerial Gym's evaluation and the scripted harness count it: the episode ran to
         // its time limit and ended within task.success_radius_m of the target (episode.hpp).
         const real d = std::sqrt(static_cast<real>(e_w[0] * e_w[0] + e_w[1] * e_w[1] + e_w[2] * e_w[2]));
-        if (within_success_radius(d, sim_->config().task.success_radius_m)) ++infos_.successes;
+        if (!fallback && within_success_radius(d, sim_->config().task.success_radius_m)) ++infos_.successes;
       }
       infos_.episode_reward_sum += episode_reward_[i];
     }

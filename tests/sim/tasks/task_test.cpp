@@ -272,6 +272,34 @@ TEST(SimTask, SuccessesCountTruncationsWithinTheRadius) {
   EXPECT_EQ(zero->infos().successes, 0u);
 }
 
+// Issue 19: position_setpoint_task's target (the bounds' centre) lies in env_with_obstacles'
+// obstacle field; forced to fall back everywhere (no point clears 100 m), the hovering robots end
+// every episode at their "target" and none counts as a success; the episodes are counted apart.
+TEST(SimTask, FallbackEpisodesAreNeverSuccesses) {
+  WorldConfig c = task_config(8, 5);
+  EXPECT_TRUE(registries().envs.make("env_with_obstacles", c.env));
+  c.env.num_envs = 8;
+  c.task.clearance_m = 100;
+  c.task.episode_len_env_steps = 50;
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  for (int e = 0; e < 8; ++e) EXPECT_TRUE(t->simulator().placement_fallback(e));
+  (void)reward_curve(*t, true, 120);
+  const TaskInfos& in = t->infos();
+  EXPECT_GT(in.truncations, 0u);
+  EXPECT_EQ(in.fallback_episodes, in.episodes);
+  EXPECT_EQ(in.real_episodes(), 0u);
+  EXPECT_EQ(in.successes, 0u);
+  EXPECT_EQ(in.success_rate(), 0.0);
+  // The empty environment: every placement is real, the rate is over every episode.
+  auto real = build(task_config(8, 5));
+  ASSERT_TRUE(real);
+  (void)reward_curve(*real, true, 520);
+  EXPECT_EQ(real->infos().fallback_episodes, 0u);
+  EXPECT_EQ(real->infos().real_episodes(), real->infos().episodes);
+  EXPECT_FALSE(real->simulator().placement_fallback(0));
+}
+
 // The issue's "reward falls under zero actions". Under lee_position_control a zero action is a
 // zero offset ("hold here"), so the reward above stays flat. What a zero action means depends on
 // the controller configuration, as in Aerial Gym:

@@ -2,6 +2,7 @@
 // algorithm, J. E. Bresenham, IBM Systems Journal 4(1), 1965).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,5 +30,33 @@ std::size_t draw_line_rgb(unsigned char* rgb, int W, int H, double x0, double y0
 /// dir/sensor_<name>_segmentation.png (colour per id). Paths written are appended to `written`.
 [[nodiscard]] bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,
                                      std::string& error);
+
+/// The success rate of a run's summary (issue 19): successes over the real episodes only, the
+/// fallback episodes (hovering at the start, never successes) named apart, "n/a" when no real
+/// episode finished: "success rate 99.6%", "success rate 80.0% (32 of 40 real episodes; 473
+/// placement fallbacks not counted)", "success rate n/a (0 episodes)".
+std::string success_rate_text(std::uint64_t episodes, std::uint64_t fallback_episodes, std::uint64_t successes);
+/// The warning printed when placements fell back (empty when none did): how many of the
+/// placements found no clear (start, target) pair, and, when that is more than 5 % of them, that
+/// the environment is too dense for the placement rule, with the ways out (the sphere's radius
+/// is named when robot_bound_plus_clearance_m > 0).
+std::string placement_fallback_text(const std::string& env_name, std::uint64_t fallbacks, std::uint64_t placements,
+                                    double robot_bound_plus_clearance_m, bool line_of_sight);
+
+/// What a run prints as its summary, also kept to be written as DIR/summary.txt (`kestrel run
+/// --out DIR`, every run kind).
+class RunReport {
+ public:
+  /// printf to stdout, and kept.
+  void say(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+  /// Kept only (not printed now: the caller prints it later).
+  void keep(const std::string& line) { text_ += line; }
+  const std::string& text() const { return text_; }
+  /// Writes the kept text to path.
+  [[nodiscard]] bool write(const std::string& path, std::string& error) const;
+
+ private:
+  std::string text_;
+};
 
 }  // namespace kestrel::sim

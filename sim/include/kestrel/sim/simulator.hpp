@@ -194,6 +194,10 @@ class Simulator {
   virtual std::uint64_t step_heap_fallbacks() const { return 0; }
 
   virtual WorldSummary summary() const = 0;
+  /// True when env's current episode was placed by a fallback (no clear start / target / path
+  /// within task.placement_attempts: the target is the start, the robot hovers). Tasks count such
+  /// an episode apart (TaskInfos::fallback_episodes), never as a success.
+  virtual bool placement_fallback(int env) const = 0;
   /// FNV-1a over every environment's state, in environment order (as World::state_hash).
   virtual std::uint64_t state_hash() const = 0;
   const std::string& last_error() const { return error_; }

@@ -33,12 +33,19 @@ struct TaskInfos {
   std::uint64_t terminations = 0;   // of which terminated (crash, or success where the task ends on it)
   std::uint64_t truncations = 0;    // of which truncated only (episode length reached)
   std::uint64_t crashes = 0;        // episodes ended by a crash (contact, out of bounds, task rule)
-  std::uint64_t successes = 0;      // episodes ended by reaching the goal (tasks that have one)
+  std::uint64_t successes = 0;      // real episodes ended by reaching the goal (tasks that have one)
+  std::uint64_t fallback_episodes = 0;  // of episodes: placed by a fallback (no clear start/target pair,
+                                        // target = start), never successes (Simulator::placement_fallback)
   double episode_reward_sum = 0;    // sum over finished episodes of the episode's summed reward
   int curriculum_level = 0;         // obstacle curriculum level now (navigation_task)
   std::uint64_t curriculum_changes = 0;  // times the curriculum level moved
   double mean_episode_reward() const { return episodes > 0 ? episode_reward_sum / static_cast<double>(episodes) : 0; }
-  double success_rate() const { return episodes > 0 ? static_cast<double>(successes) / static_cast<double>(episodes) : 0; }
+  /// Finished episodes with a real (start, target) pair: the success rate's denominator.
+  std::uint64_t real_episodes() const { return episodes - fallback_episodes; }
+  /// Successes over real episodes; 0 when there are none (check real_episodes() before printing it).
+  double success_rate() const {
+    return real_episodes() > 0 ? static_cast<double>(successes) / static_cast<double>(real_episodes()) : 0;
+  }
 };
 
 class Task {

@@ -57,6 +57,7 @@ struct WorldData {
   std::vector<int> phys_steps, latency;            // (E) physics steps per env-step; step the action arrives
   std::vector<int> episode_step;                   // (E)
   std::vector<std::uint8_t> episode_ended;         // (E) this env-step ended the episode (before any auto-reset)
+  std::vector<std::uint8_t> episode_fallback;      // (E) a robot of this episode was placed by a fallback
   std::vector<int> num_obstacles;                  // (E) used slots (<= C)
   std::vector<int> episodes_since_layout;          // (E)
   std::vector<std::uint32_t> layout_generation;    // (E) layouts drawn so far
