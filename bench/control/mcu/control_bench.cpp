@@ -28,6 +28,7 @@
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "kestrel/controllers/controller.hpp"
 #include "kestrel/dynamics/multibody.hpp"
+#include "quadruped_tree.hpp"  // bench/dynamics: the tree the host side by side times too
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/kernel/rigid_body.hpp"
 #include "kestrel/kestrel.h"
@@ -385,71 +386,32 @@ int main() {
         [] { g_sink = static_cast<std::uint32_t>(kestrel::policy::mlp_forward(g_mlp, g_mlp_obs, g_mlp_action)); });
   // Articulated-body dynamics (dynamics/multibody.hpp): the legs of a 12-joint quadruped on a
   // fixed trunk (hip abduction about x, hip and knee flexion about y per leg; Go2-like masses),
-  // one call each of RNEA, CRBA and ABA at a bent stance with joint velocities.
+  // one call each of RNEA, CRBA and ABA at a bent stance with joint velocities; then the same
+  // quadruped on a floating trunk (free joint: 18 velocity, 19 configuration coordinates), as a
+  // legged robot is simulated: trunk tilted and moving (bench/dynamics/quadruped_tree.hpp, the
+  // model the host's side-by-side with Pinocchio times too).
   {
     namespace dy = kestrel::dynamics;
     static dy::MultibodyModel<13> legs;
     static dy::MultibodyData<13> dd;
     static real q[12], qd[12], qdd[12], tau[12], H[144];
-    auto link = [](real m, const Vec3& com, const Vec3& diag) {
-      dy::SpatialInertia b;
-      b.mass = m;
-      b.com = com;
-      b.inertia_com = diag.asDiagonal();
-      return b;
-    };
-    legs.num_bodies = 13;
-    legs.parent[0] = -1;
-    legs.joint[0] = dy::JointType::fixed;
-    legs.body[0] = link(6.9_r, Vec3::Zero(), Vec3(0.03_r, 0.1_r, 0.11_r));
-    for (int leg = 0; leg < 4; ++leg) {
-      const real sx = leg < 2 ? 1 : -1, sy = leg % 2 == 0 ? 1 : -1;
-      const int hip = 1 + 3 * leg;
-      legs.parent[hip] = 0;
-      legs.X_tree[hip].r = Vec3(0.19_r * sx, 0.05_r * sy, 0);
-      legs.axis[hip] = Vec3(1, 0, 0);
-      legs.body[hip] = link(0.68_r, Vec3(0, 0.01_r * sy, 0), Vec3(0.0005_r, 0.0009_r, 0.0006_r));
-      legs.parent[hip + 1] = hip;
-      legs.X_tree[hip + 1].r = Vec3(0, 0.09_r * sy, 0);
-      legs.axis[hip + 1] = Vec3(0, 1, 0);
-      legs.body[hip + 1] = link(1.0_r, Vec3(0, 0, -0.03_r), Vec3(0.005_r, 0.005_r, 0.001_r));
-      legs.parent[hip + 2] = hip + 1;
-      legs.X_tree[hip + 2].r = Vec3(0, 0, -0.21_r);
-      legs.axis[hip + 2] = Vec3(0, 1, 0);
-      legs.body[hip + 2] = link(0.24_r, Vec3(0, 0, -0.1_r), Vec3(0.001_r, 0.001_r, 0.00003_r));
-    }
-    for (int b = 1; b < 13; ++b) legs.joint[b] = dy::JointType::revolute;
-    if (dy::finish_model(legs) != Status::ok || legs.num_dofs != 12) {
+    if (kestrel::bench_trees::make_quadruped_tree(legs, false) != Status::ok) {
       println("control bench: quadruped tree setup failed");
       return 1;
     }
-    for (int k = 0; k < 12; ++k) {
-      q[k] = k % 3 == 0 ? 0.05_r : k % 3 == 1 ? 0.8_r : -1.5_r;
-      qd[k] = 0.1_r * static_cast<real>(k % 5) - 0.2_r;
-      qdd[k] = 0.3_r * static_cast<real>(k % 4) - 0.4_r;
-    }
+    kestrel::bench_trees::quadruped_state(false, q, qd, qdd);
     dy::rnea(legs, dd, q, qd, qdd, tau);
     bench("rnea_quadruped_legs_12dof", "fixed_base_13_bodies", 10, [] { dy::rnea(legs, dd, q, qd, qdd, tau); });
     bench("crba_quadruped_legs_12dof", "fixed_base_13_bodies", 10, [] { dy::crba(legs, dd, q, H, 12); });
     bench("aba_quadruped_legs_12dof", "fixed_base_13_bodies", 10,
           [] { g_sink = static_cast<std::uint32_t>(dy::aba(legs, dd, q, qd, tau, qdd)); });
-    // The same quadruped on a floating trunk (free joint: 18 velocity, 19 configuration
-    // coordinates), as a legged robot is simulated: trunk tilted and moving.
     static dy::MultibodyModel<13> robot;
     static real fq[19], fqd[18], fqdd[18], ftau[18], fH[18 * 18];
-    robot = legs;
-    robot.joint[0] = dy::JointType::free;
-    if (dy::finish_model(robot) != Status::ok || robot.num_dofs != 18 || robot.num_q != 19) {
+    if (kestrel::bench_trees::make_quadruped_tree(robot, true) != Status::ok || robot.num_q != 19) {
       println("control bench: floating quadruped setup failed");
       return 1;
     }
-    const real trunk_q[7] = {0.1_r, -0.2_r, 0.3_r, 0.0499792_r, 0.0998334_r, 0, 0.9937403_r};  // unit quaternion
-    for (int k = 0; k < 7; ++k) fq[k] = trunk_q[k];
-    for (int k = 0; k < 12; ++k) fq[7 + k] = q[k];
-    for (int k = 0; k < 18; ++k) {
-      fqd[k] = k < 6 ? 0.2_r * static_cast<real>(k % 3) - 0.1_r : qd[k - 6];
-      fqdd[k] = k < 6 ? 0.5_r * static_cast<real>(k % 2) - 0.2_r : qdd[k - 6];
-    }
+    kestrel::bench_trees::quadruped_state(true, fq, fqd, fqdd);
     dy::rnea(robot, dd, fq, fqd, fqdd, ftau);
     bench("rnea_quadruped_floating_18dof", "floating_base_13_bodies", 10, [] { dy::rnea(robot, dd, fq, fqd, fqdd, ftau); });
     bench("crba_quadruped_floating_18dof", "floating_base_13_bodies", 10, [] { dy::crba(robot, dd, fq, fH, 18); });

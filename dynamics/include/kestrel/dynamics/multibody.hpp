@@ -65,7 +65,8 @@ struct MultibodyData {
   Transform Xup[kMaxBodies];  // parent frame -> body frame at the current q
   Vec6 S[kMaxBodies];         // joint motion subspace (zero for fixed joints)
   Vec6 v[kMaxBodies], a[kMaxBodies], f[kMaxBodies], c[kMaxBodies], pA[kMaxBodies], U[kMaxBodies];
-  Mat6 IA[kMaxBodies];
+  Mat6 IA[kMaxBodies];         // ABA's articulated inertias
+  RigidInertia Ic[kMaxBodies];  // CRBA's composite inertias
   real d[kMaxBodies] = {}, u[kMaxBodies] = {};
 };
 
@@ -247,15 +248,17 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
   for (int r = 0; r < m.num_dofs; ++r)
     for (int c = 0; c < m.num_dofs; ++c) H[ld * r + c] = 0;
   detail::update_kinematics(m, d, q);
-  for (int i = 0; i < m.num_bodies; ++i) d.IA[i] = inertia_matrix(m.body[i]);  // composite inertias
+  // Composite inertias, in their 10-number rigid-body form (RigidInertia: a sum of rigid bodies
+  // is one; about 3x fewer operations per body than the 6 x 6 X^T I X).
+  for (int i = 0; i < m.num_bodies; ++i) d.Ic[i] = rigid_inertia(m.body[i]);
   for (int i = m.num_bodies - 1; i >= 0; --i)
-    if (m.parent[i] >= 0) d.IA[m.parent[i]] += detail::to_parent(d.Xup[i], d.IA[i]);
+    if (m.parent[i] >= 0) d.Ic[m.parent[i]] += rigid_to_parent(d.Xup[i], d.Ic[i]);
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k0 = m.dof_index[i];
     for (int c = 0; c < joint_dofs(m, i); ++c) {  // each of joint i's columns
       const int k = k0 + c;
       const Vec6 Si = detail::joint_column(m, d, i, c);
-      Vec6 F = d.IA[i] * Si;
+      Vec6 F = rigid_times(d.Ic[i], Si);
       for (int c2 = 0; c2 <= c; ++c2)  // the block of joint i itself
         H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::joint_column(m, d, i, c2).dot(F);
       H[ld * k + k] += m.armature[i];

@@ -95,6 +95,47 @@ inline Mat6 inertia_matrix(const SpatialInertia& b) {
   return I;
 }
 
+/// A rigid body's inertia (or a rigid composite's: a sum of rigid-body inertias is one) at a
+/// frame's origin, in that frame, in its 10 numbers (RBDA section 2.13, eq. 2.62): mass m, first
+/// moment h = m c and rotational inertia about the origin Ibar, the 6 x 6 form being
+/// [Ibar, h x; h x^T, m 1]. CRBA keeps its composite inertias so: moving one to the parent takes
+/// three 3 x 3 products (rigid_to_parent) where the 6 x 6 form takes two 6 x 6 ones.
+struct RigidInertia {
+  real m = 0;
+  Vec3 h = Vec3::Zero();
+  Mat3 Ibar = Mat3::Zero();
+  RigidInertia& operator+=(const RigidInertia& o) {
+    m += o.m;
+    h += o.h;
+    Ibar += o.Ibar;
+    return *this;
+  }
+};
+inline RigidInertia rigid_inertia(const SpatialInertia& b) {
+  const Mat3 C = hat(b.com);
+  RigidInertia I;
+  I.m = b.mass;
+  I.h = b.mass * b.com;
+  I.Ibar = b.inertia_com + b.mass * C * C.transpose();
+  return I;
+}
+/// I s = [Ibar w + h x v; m v - h x w] for s = [w; v].
+inline Vec6 rigid_times(const RigidInertia& I, const Vec6& s) {
+  const Vec3 w = ang(s), v = lin(s);
+  return spatial(I.Ibar * w + I.h.cross(v), I.m * v - I.h.cross(w));
+}
+/// The inertia given in frame B expressed in frame A, for X = (E, r) from A to B: X^T I X (RBDA
+/// eq. 2.66): h_A = E^T h + m r, Ibar_A = E^T Ibar E - r x (E^T h) x - (h_A) x r x.
+inline RigidInertia rigid_to_parent(const Transform& X, const RigidInertia& I) {
+  const Vec3 g = X.E.transpose() * I.h;
+  RigidInertia o;
+  o.m = I.m;
+  o.h = g + I.m * X.r;
+  const Mat3 R = hat(X.r);
+  o.Ibar = X.E.transpose() * I.Ibar * X.E - R * hat(g) - hat(o.h) * R;
+  return o;
+}
+
 /// I m without forming the 6 x 6 matrix: [Ic w + c x (m (v - c x w)) ... ] (RBDA eq. 2.63 applied).
 inline Vec6 inertia_times(const SpatialInertia& b, const Vec6& m) {
   const Vec3 w = ang(m), v = lin(m);
