@@ -147,29 +147,17 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
     }
     wrote.insert(wrote.begin(), {tpath, out_dir + "/envs.csv", out_dir + "/trajectory.png"});
   } else {
-    std::FILE* f = std::fopen(tpath.c_str(), "w");
-    if (f == nullptr) {
-      std::fprintf(stderr, "kestrel: %s: cannot write\n", tpath.c_str());
+    if (!write_trace_csv(tpath, "x_m,y_m,z_m", trace.data(), trace_envs, steps, err)) {
+      std::fprintf(stderr, "kestrel: %s\n", err.c_str());
       return 1;
     }
-    std::fprintf(f, "env,step,x_m,y_m,z_m\n");
-    for (int e = 0; e < trace_envs; ++e)
-      for (long long k = 0; k < steps; ++k) {
-        const real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(k)) * 3];
-        std::fprintf(f, "%d,%lld,%.6g,%.6g,%.6g\n", e, k, static_cast<double>(t[0]), static_cast<double>(t[1]), static_cast<double>(t[2]));
-      }
-    std::fclose(f);
     wrote.insert(wrote.begin(), tpath);
   }
-  char hash[64];
-  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", task->state_hash());
-  rep.keep(hash);
-  if (!rep.write(out_dir + "/summary.txt", err)) {
+  for (const std::string& p : wrote) std::printf("  wrote %s\n", p.c_str());
+  if (!rep.finish(out_dir, task->state_hash(), err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
   }
-  for (const std::string& p : wrote) std::printf("  wrote %s\n", p.c_str());
-  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
   return 0;
 }
 
@@ -340,14 +328,10 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
     }
     for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), r.image_env);
   }
-  char hash[64];
-  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", world->state_hash());
-  rep.keep(hash);
-  if (!rep.write(out_dir + "/summary.txt", err)) {
+  if (!rep.finish(out_dir, world->state_hash(), err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
   }
-  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
   return 0;
 }
 

@@ -58,6 +58,18 @@ static void plant_to_state(const plant* b, kestrel_state* s) {
   memcpy(s->angvel_b, b->w, sizeof b->w);
 }
 
+/* A level vehicle at rest 1 m up, holding position (0, 0, 1) with yaw 0. */
+static void level_hover_at_1m(kestrel_state* s, kestrel_setpoint* sp) {
+  memset(s, 0, sizeof *s);
+  s->position_w[2] = 1.0f;
+  s->orientation_xyzw[3] = 1.0f;
+  sp->mode = KESTREL_MODE_POSITION;
+  sp->value[0] = 0.0f;
+  sp->value[1] = 0.0f;
+  sp->value[2] = 1.0f;
+  sp->value[3] = 0.0f;
+}
+
 /* The kinematic part of a plant step, after v and w took this step's accelerations: position,
  * q += dt/2 q (x) (w, 0) normalised, and the ground. */
 static void plant_advance(plant* b, float dt) {
@@ -487,14 +499,7 @@ static void test_validation(void) {
   kestrel_setpoint sp;
   kestrel_output out, before;
   int i;
-  memset(&s, 0, sizeof s);
-  s.position_w[2] = 1.0f;
-  s.orientation_xyzw[3] = 1.0f;
-  sp.mode = KESTREL_MODE_POSITION;
-  sp.value[0] = 0.0f;
-  sp.value[1] = 0.0f;
-  sp.value[2] = 1.0f;
-  sp.value[3] = 0.0f;
+  level_hover_at_1m(&s, &sp);
   memset(&before, 0x5a, sizeof before);
 
   /* Negative gains: INVALID_ARGUMENT, and a storage that held a working stack is unusable. */
@@ -767,14 +772,7 @@ static void test_hexa_motor_failure(void) {
   kestrel_output out;
   float fz = 0.0f, tx = 0.0f, ty = 0.0f;
   int i;
-  memset(&s, 0, sizeof s);
-  s.position_w[2] = 1.0f;
-  s.orientation_xyzw[3] = 1.0f;
-  sp.mode = KESTREL_MODE_POSITION;
-  sp.value[0] = 0.0f;
-  sp.value[1] = 0.0f;
-  sp.value[2] = 1.0f;
-  sp.value[3] = 0.0f;
+  level_hover_at_1m(&s, &sp);
   check(kestrel_default_params(KESTREL_PRESET_HEXAROTOR, &p) == KESTREL_OK, "hexa params");
   p.use_motor_model = 0;
   check(kestrel_init_params(&g_hexa, &p) == KESTREL_OK, "init hexa");

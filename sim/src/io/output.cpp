@@ -284,4 +284,34 @@ bool RunReport::write(const std::string& path, std::string& error) const {
   return true;
 }
 
+bool RunReport::finish(const std::string& out_dir, std::uint64_t state_hash, std::string& error) {
+  char hash[64];
+  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", state_hash);
+  keep(hash);
+  if (!write(out_dir + "/summary.txt", error)) return false;
+  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
+  return true;
+}
+
+bool write_trace_csv(const std::string& path, const char* columns, const real* trace, int envs, long long steps,
+                     std::string& error) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    error = path + ": cannot write";
+    return false;
+  }
+  std::fprintf(f, "env,step,%s\n", columns);
+  for (int e = 0; e < envs; ++e)
+    for (long long k = 0; k < steps; ++k) {
+      const real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(k)) * 3];
+      std::fprintf(f, "%d,%lld,%.6g,%.6g,%.6g\n", e, k, static_cast<double>(t[0]), static_cast<double>(t[1]),
+                   static_cast<double>(t[2]));
+    }
+  if (std::fclose(f) != 0) {
+    error = path + ": cannot write";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace kestrel::sim

@@ -73,28 +73,16 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   if (!fb.empty()) rep.say("  %s\n", fb.c_str());
   ::mkdir(out_dir.c_str(), 0755);
   const std::string path = out_dir + "/trajectory.csv";
-  if (std::FILE* f = std::fopen(path.c_str(), "w")) {
-    std::fprintf(f, "env,step,x_m,y_m,yaw_rad\n");
-    for (int e = 0; e < trace_envs; ++e)
-      for (long long k = 0; k < steps; ++k) {
-        const real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(k)) * 3];
-        std::fprintf(f, "%d,%lld,%.6g,%.6g,%.6g\n", e, k, static_cast<double>(t[0]), static_cast<double>(t[1]), static_cast<double>(t[2]));
-      }
-    std::fclose(f);
-    std::printf("  wrote %s\n", path.c_str());
-  } else {
-    std::fprintf(stderr, "kestrel: %s: cannot write\n", path.c_str());
-    return 1;
-  }
-  char hash[64];
-  std::snprintf(hash, sizeof hash, "state hash: %016" PRIx64 "\n", sim.state_hash());
-  rep.keep(hash);
   std::string err;
-  if (!rep.write(out_dir + "/summary.txt", err)) {
+  if (!write_trace_csv(path, "x_m,y_m,yaw_rad", trace.data(), trace_envs, steps, err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
   }
-  std::printf("  wrote %s/summary.txt\n%s", out_dir.c_str(), hash);
+  std::printf("  wrote %s\n", path.c_str());
+  if (!rep.finish(out_dir, sim.state_hash(), err)) {
+    std::fprintf(stderr, "kestrel: %s\n", err.c_str());
+    return 1;
+  }
   return 0;
 }
 

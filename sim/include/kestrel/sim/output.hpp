@@ -43,6 +43,11 @@ std::string success_rate_text(std::uint64_t episodes, std::uint64_t fallback_epi
 std::string placement_fallback_text(const std::string& env_name, std::uint64_t fallbacks, std::uint64_t placements,
                                     double robot_bound_plus_clearance_m, bool line_of_sight);
 
+/// The first envs traces of a run (x, y, third value per step, env-major: trace[(e * steps + k) * 3])
+/// as CSV with the columns "env,step," + columns. false (error names the file) if it cannot write.
+[[nodiscard]] bool write_trace_csv(const std::string& path, const char* columns, const real* trace, int envs,
+                                   long long steps, std::string& error);
+
 /// What a run prints as its summary, also kept to be written as DIR/summary.txt (`kestrel run
 /// --out DIR`, every run kind).
 class RunReport {
@@ -54,6 +59,9 @@ class RunReport {
   const std::string& text() const { return text_; }
   /// Writes the kept text to path.
   [[nodiscard]] bool write(const std::string& path, std::string& error) const;
+  /// Ends a run's report: keeps "state hash: <16 hex digits>", writes out_dir/summary.txt and
+  /// prints "  wrote out_dir/summary.txt" and the hash line. false (error set) if it cannot write.
+  [[nodiscard]] bool finish(const std::string& out_dir, std::uint64_t state_hash, std::string& error);
 
  private:
   std::string text_;
