@@ -39,10 +39,12 @@ def test_reset_with_seed_repeats_and_differs():
 
 
 @pytest.mark.parametrize("scenario,steps", [("position_setpoint_attitude.yaml", 400), ("planar_position_setpoint_task.yaml", 300)])
-def test_same_final_hash_as_kestrel_run(root, kestrel_cli, scenario, steps):
+def test_same_final_hash_as_kestrel_run(root, kestrel_cli, scenario, steps, tmp_path):
     path = root / "sim" / "scenarios" / scenario
+    # --out: every run writes its summary and trajectory, here not into the working directory.
     out = subprocess.run([str(kestrel_cli), "run", str(path), "--envs", "32", "--steps", str(steps), "--seed", "7",
-                          "--threads", "2", "--quiet", "--policy", "scripted"], check=True, capture_output=True, text=True).stdout
+                          "--threads", "2", "--quiet", "--policy", "scripted", "--out", str(tmp_path / "out")],
+                         check=True, capture_output=True, text=True).stdout
     cli_hash = int(re.search(r"state hash: ([0-9a-f]{16})", out).group(1), 16)
     t = kestrel.make_task(scenario=str(path), num_envs=32, seed=7, threads=1)
     for _ in range(steps):
