@@ -293,17 +293,7 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = world->summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
-  rep.say("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes,
-          s.resets, s.timeouts, s.out_of_bounds);
-  // Success is counted over every finished real episode (a crash or an exit ends one
-  // unsuccessfully), not only over the timed-out ones; a fallback episode hovers at its start and is
-  // counted apart, never as a success (issue 19).
-  char crash_rate[32] = "n/a (0 episodes)";
-  if (s.episodes_done > 0)
-    std::snprintf(crash_rate, sizeof crash_rate, "%.1f%%", 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done));
-  rep.say("  episodes %" PRIu64 ": %s (within %.2f m of the target at timeout), crash rate %s\n", s.episodes_done,
-          success_rate_text(s.episodes_done, s.fallback_episodes, s.successes).c_str(),
-          static_cast<double>(cfg.task.success_radius_m), crash_rate);
+  report_episodes(rep, s, cfg.task.success_radius_m);
   rep.say("  tracking error (|setpoint - position|): mean %.3f m; distance to target at episode end %.3f m; "
           "final mean distance to target %.3f m\n",
           s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);

@@ -293,6 +293,20 @@ bool RunReport::finish(const std::string& out_dir, std::uint64_t state_hash, std
   return true;
 }
 
+void report_episodes(RunReport& rep, const WorldSummary& s, real success_radius_m) {
+  rep.say("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes,
+          s.resets, s.timeouts, s.out_of_bounds);
+  // Success is counted over every finished real episode (a crash or an exit ends one
+  // unsuccessfully), not only over the timed-out ones; a fallback episode hovers at its start and is
+  // counted apart, never as a success (issue 19).
+  char crash_rate[32] = "n/a (0 episodes)";
+  if (s.episodes_done > 0)
+    std::snprintf(crash_rate, sizeof crash_rate, "%.1f%%", 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done));
+  rep.say("  episodes %" PRIu64 ": %s (within %.2f m of the target at timeout), crash rate %s\n", s.episodes_done,
+          success_rate_text(s.episodes_done, s.fallback_episodes, s.successes).c_str(),
+          static_cast<double>(success_radius_m), crash_rate);
+}
+
 bool write_trace_csv(const std::string& path, const char* columns, const real* trace, int envs, long long steps,
                      std::string& error) {
   std::FILE* f = std::fopen(path.c_str(), "w");

@@ -52,15 +52,7 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = sim.summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
-  rep.say("  crashes %" PRIu64 ", resets %" PRIu64 " (timeouts %" PRIu64 ", out of bounds %" PRIu64 ")\n", s.crashes, s.resets,
-          s.timeouts, s.out_of_bounds);
-  // Successes over real episodes; fallback episodes (target = start) apart (issue 19).
-  char crash_rate[32] = "n/a (0 episodes)";
-  if (s.episodes_done > 0)
-    std::snprintf(crash_rate, sizeof crash_rate, "%.1f%%", 100.0 * static_cast<double>(s.crashes) / static_cast<double>(s.episodes_done));
-  rep.say("  episodes %" PRIu64 ": %s (within %.2f m of the target at timeout), crash rate %s\n", s.episodes_done,
-          success_rate_text(s.episodes_done, s.fallback_episodes, s.successes).c_str(),
-          static_cast<double>(cfg.task.success_radius_m), crash_rate);
+  report_episodes(rep, s, cfg.task.success_radius_m);
   rep.say("  distance to target: mean over env-steps %.3f m; at episode end %.3f m; final mean %.3f m\n",
           s.mean_tracking_error_m, s.episode_end_distance_m, s.final_mean_distance_m);
   if (sim.backend() == Backend::planar)

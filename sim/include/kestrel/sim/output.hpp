@@ -43,6 +43,11 @@ std::string success_rate_text(std::uint64_t episodes, std::uint64_t fallback_epi
 std::string placement_fallback_text(const std::string& env_name, std::uint64_t fallbacks, std::uint64_t placements,
                                     double robot_bound_plus_clearance_m, bool line_of_sight);
 
+class RunReport;
+/// A scripted run's episode lines, the same on every backend: crashes and resets, then the
+/// episodes with the success rate over real episodes (success_rate_text) and the crash rate.
+void report_episodes(RunReport& rep, const WorldSummary& s, real success_radius_m);
+
 /// The first envs traces of a run (x, y, third value per step, env-major: trace[(e * steps + k) * 3])
 /// as CSV with the columns "env,step," + columns. false (error names the file) if it cannot write.
 [[nodiscard]] bool write_trace_csv(const std::string& path, const char* columns, const real* trace, int envs,
