@@ -78,7 +78,20 @@ void reference_forward(const TestMlp& p, const real* obs, double* y) {
   }
 }
 
-TestMlp g_mlp;  // static storage, as firmware keeps it (4.7 K floats: too big for an MCU test's stack)
+// Static storage, as firmware keeps it (4.7 K floats: too big for an MCU test's stack). The small
+// networks of PartsLeftOutGiveTheSameBitsAsTheirIdentity share it (the netduinoplus2 test image
+// is short of RAM); every test fills the network it uses before using it.
+using FullMlp = pl::MlpParams<13, 16, 16, 4>;
+using LeanMlp = pl::MlpParams<13, 16, 16, 4, 0u>;  // no normalisation, no action clamp
+union NetworkStorage {
+  TestMlp big;
+  struct {
+    FullMlp full;
+    LeanMlp lean;
+  } small;
+};
+NetworkStorage g_networks;
+TestMlp& g_mlp = g_networks.big;
 
 }  // namespace
 
@@ -314,39 +327,52 @@ KTEST(PolicyMlp, SameBitsOnEveryTarget) {
 #endif
 }
 
-namespace {
-using LeanMlp = pl::MlpParams<13, 64, 64, 4, 0u>;  // no normalisation, no action clamp
-LeanMlp g_lean;
-}  // namespace
-
 KTEST(PolicyMlp, PartsLeftOutGiveTheSameBitsAsTheirIdentity) {
   // The exporter leaves out an identity normalisation and a clamp a tanh squash cannot reach: the
   // lean network must give the bits of the full one that carries them, and its flash is smaller.
-  static_assert(sizeof(LeanMlp) + 26 * sizeof(real) + sizeof(real) + 8 * sizeof(real) - 8 <= sizeof(TestMlp),
+  static_assert(sizeof(LeanMlp) + 26 * sizeof(real) + sizeof(real) + 8 * sizeof(real) - 8 <= sizeof(FullMlp),
                 "the parts left out take no room");
-  random_mlp(g_mlp, pl::Activation::elu, 31);
-  g_mlp.output_squash = pl::Squash::tanh;
-  g_mlp.obs_clip = 3.0e38_r;
+  RngStream r(31, 0, kPurposeUser);
+  FullMlp& f = g_networks.small.full;
+  LeanMlp& g_lean = g_networks.small.lean;
+  f.activation = pl::Activation::elu;
+  f.output_squash = pl::Squash::tanh;
+  f.obs_clip = 3.0e38_r;
   for (int i = 0; i < 13; ++i) {
-    g_mlp.obs_mean[i] = 0;
-    g_mlp.obs_inv_std[i] = 1;
+    f.obs_mean[i] = 0;
+    f.obs_inv_std[i] = 1;
   }
-  g_lean.activation = g_mlp.activation;
-  g_lean.hidden1 = g_mlp.hidden1;
-  g_lean.hidden2 = g_mlp.hidden2;
-  g_lean.output = g_mlp.output;
+  const real s1 = 1 / std::sqrt(13.0_r), s2 = 1 / std::sqrt(16.0_r);
+  for (int o = 0; o < 16; ++o) {
+    for (int i = 0; i < 13; ++i) f.hidden1.weight[o][i] = r.uniform(-s1, s1);
+    f.hidden1.bias[o] = r.uniform(-s1, s1);
+    for (int i = 0; i < 16; ++i) f.hidden2.weight[o][i] = r.uniform(-s2, s2);
+    f.hidden2.bias[o] = r.uniform(-s2, s2);
+  }
   for (int o = 0; o < 4; ++o) {
-    g_lean.action_scale[o] = g_mlp.action_scale[o];
-    g_lean.action_offset[o] = g_mlp.action_offset[o];
+    for (int i = 0; i < 16; ++i) f.output.weight[o][i] = r.uniform(-s2, s2);
+    f.output.bias[o] = r.uniform(-s2, s2);
+    f.action_low[o] = -1;
+    f.action_high[o] = 1;
+    f.action_scale[o] = 2;
+    f.action_offset[o] = o == 2 ? 0.5_r : 0;
+  }
+  g_lean.activation = f.activation;
+  g_lean.hidden1 = f.hidden1;
+  g_lean.hidden2 = f.hidden2;
+  g_lean.output = f.output;
+  for (int o = 0; o < 4; ++o) {
+    g_lean.action_scale[o] = f.action_scale[o];
+    g_lean.action_offset[o] = f.action_offset[o];
   }
   g_lean.output_squash = pl::Squash::tanh;
+  KEXPECT_TRUE(pl::validate_mlp(f) == Status::ok);
   KEXPECT_TRUE(pl::validate_mlp(g_lean) == Status::ok);
-  RngStream r(32, 0, kPurposeUser);
   int differ = 0;
   for (int n = 0; n < 1000; ++n) {
     real obs[13], a_full[4] = {}, a_lean[4] = {};
     for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-40, 40);  // large: the squash saturates too
-    KEXPECT_TRUE(pl::mlp_forward(g_mlp, obs, a_full) == Status::ok);
+    KEXPECT_TRUE(pl::mlp_forward(f, obs, a_full) == Status::ok);
     KEXPECT_TRUE(pl::mlp_forward(g_lean, obs, a_lean) == Status::ok);
     differ += std::memcmp(a_full, a_lean, sizeof a_full) != 0;
   }
@@ -364,12 +390,10 @@ KTEST(PolicyMlp, PartsLeftOutGiveTheSameBitsAsTheirIdentity) {
   KEXPECT_TRUE(pl::max_abs_action(g_lean, 0) == 2 && pl::max_abs_action(g_lean, 2) == 2.5_r);
   KEXPECT_TRUE(pl::actions_within(g_lean, 2.5_r) && !pl::actions_within(g_lean, 2.4_r));
   // With a clamp, the tighter of it and the squash: [-1, 0.5] x 2 + 0 -> 2; unsquashed, the clamp's.
-  g_mlp.action_low[0] = -1;
-  g_mlp.action_high[0] = 0.5_r;
-  KEXPECT_TRUE(pl::max_abs_action(g_mlp, 0) == 2);
-  g_mlp.output_squash = pl::Squash::none;
-  g_mlp.action_low[0] = -3;
-  KEXPECT_TRUE(pl::max_abs_action(g_mlp, 0) == 6);
-  random_mlp(g_mlp, pl::Activation::tanh, 3);
-  g_mlp.output_squash = pl::Squash::none;
+  f.action_low[0] = -1;
+  f.action_high[0] = 0.5_r;
+  KEXPECT_TRUE(pl::max_abs_action(f, 0) == 2);
+  f.output_squash = pl::Squash::none;
+  f.action_low[0] = -3;
+  KEXPECT_TRUE(pl::max_abs_action(f, 0) == 6);
 }
