@@ -278,9 +278,14 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
 /// on the base, usually zero). Status::ok; non_finite_input (qdd untouched) for a non-finite
 /// input, a base quaternion off unit length by more than 1e-3, or a singular articulated inertia
 /// (a joint with no inertia behind it).
+///
+/// implicit_damping_dt h > 0 solves (M + h D) qdd = tau - bias - D qd instead, D the joints'
+/// viscous damping: the accelerations of a step of length h with the damping taken at the end of
+/// the step (MuJoCo's implicit damping), which step_semi_implicit uses. In ABA it is the joint's
+/// armature plus h times its damping.
 template <int N>
 [[nodiscard]] Status aba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* tau,
-                         real* qdd, const Vec6* f_ext = nullptr) {
+                         real* qdd, const Vec6* f_ext = nullptr, real implicit_damping_dt = 0) {
   const int n = m.num_dofs;
   if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
   if (m.joint[0] == JointType::free) {
@@ -307,7 +312,7 @@ template <int N>
     Vec6 pa = d.pA[i];
     if (k >= 0) {
       d.U[i] = d.IA[i] * d.S[i];
-      d.d[i] = d.S[i].dot(d.U[i]) + m.armature[i];
+      d.d[i] = d.S[i].dot(d.U[i]) + m.armature[i] + implicit_damping_dt * m.damping[i];
       if (!(d.d[i] > 0)) return Status::non_finite_input;
       d.u[i] = tau[k] - m.damping[i] * qd[k] - d.S[i].dot(d.pA[i]);
       Ia -= d.U[i] * d.U[i].transpose() / d.d[i];
@@ -384,6 +389,59 @@ void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const
       }
     }
   }
+}
+
+/// One step of length dt_s of semi-implicit (symplectic) Euler with implicit joint damping, the
+/// scheme MuJoCo's default Euler integrator uses (E. Todorov, T. Erez, Y. Tassa, "MuJoCo: A physics
+/// engine for model-based control", IROS 2012; mj_Euler): the accelerations with the damping taken
+/// at the end of the step (aba's implicit_damping_dt), the velocities first, qd += dt qdd, then the
+/// positions with the new velocities. A revolute or prismatic joint: q += dt qd. The free joint
+/// (MuJoCo's mj_integratePos): the base origin moves by dt R v_b (R its orientation) and the
+/// orientation turns by the body-frame rotation vector dt w_b (an exact exponential), then is
+/// renormalised. Why: explicit Euler gains energy and needs dt < 2 I / D on a damped joint; this
+/// keeps a conservative system's energy bounded and any damping stable at legged_gym's dt = 0.005 s
+/// (tests/dynamics/test_multibody.cpp). qdd (num_dofs, may be null) receives the accelerations.
+/// Status as aba; on any refusal q and qd are left as they were.
+template <int N>
+[[nodiscard]] Status step_semi_implicit(const MultibodyModel<N>& m, MultibodyData<N>& d, real* q, real* qd,
+                                        const real* tau, real dt_s, real* qdd = nullptr,
+                                        const Vec6* f_ext = nullptr) {
+  if (!(dt_s > 0) || !is_finite(dt_s)) return Status::invalid_argument;
+  real acc[max_dofs<N>()];
+  const Status st = aba(m, d, q, qd, tau, acc, f_ext, dt_s);
+  if (st != Status::ok) return st;
+  const int n = m.num_dofs;
+  real v_new[max_dofs<N>()];
+  for (int k = 0; k < n; ++k) v_new[k] = qd[k] + dt_s * acc[k];
+  if (!all_finite(v_new, n)) return Status::non_finite_input;
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], j = m.q_index[i];
+    if (k < 0) continue;
+    if (m.joint[i] != JointType::free) {
+      q[j] += dt_s * v_new[k];
+      continue;
+    }
+    const Quat Q = quat_from_xyzw(q + j + 3);
+    const Vec3 v_b(v_new[k], v_new[k + 1], v_new[k + 2]), w_b(v_new[k + 3], v_new[k + 4], v_new[k + 5]);
+    const Vec3 dp = dt_s * rotate(Q, v_b);
+    // q <- q (x) exp(dt w_b / 2): the deterministic sin_cos and quat_mul, the same bits on every target.
+    const real angle = w_b.norm() * dt_s;
+    Quat dq = Quat::Identity();
+    if (angle > 0) {
+      const Vec3 axis = w_b / w_b.norm();
+      real sh = 0, ch = 1;
+      sin_cos(angle * real(0.5), sh, ch);
+      dq = quat_from_xyzw(axis[0] * sh, axis[1] * sh, axis[2] * sh, ch);
+    }
+    const Vec4 qn = to_xyzw(quat_mul(Q, dq));
+    const real len = std::sqrt(qn.dot(qn));
+    for (int a = 0; a < 3; ++a) q[j + a] += dp[a];
+    for (int a = 0; a < 4; ++a) q[j + 3 + a] = qn[a] / len;
+  }
+  for (int k = 0; k < n; ++k) qd[k] = v_new[k];
+  if (qdd != nullptr)
+    for (int k = 0; k < n; ++k) qdd[k] = acc[k];
+  return Status::ok;
 }
 
 }  // namespace kestrel::dynamics
