@@ -28,7 +28,7 @@ Status build_allocation_model(const Airframe& airframe, const MotorHealth& healt
       continue;
     }
     if (s < 1) m.weak_mask = static_cast<std::uint16_t>(m.weak_mask | (1u << i));
-    m.effectiveness.col(i) = airframe.effectiveness.col(i);
+    m.effectiveness.map().col(i) = airframe.effectiveness.col(i);
     m.thrust_min_N[i] = s * airframe.thrust_min_N[i];
     m.thrust_max_N[i] = s * airframe.thrust_max_N[i];
   }
@@ -38,7 +38,9 @@ Status build_allocation_model(const Airframe& airframe, const MotorHealth& healt
       if (m.effectiveness(k, i) != 0) m.wrench_row_mask = static_cast<std::uint8_t>(m.wrench_row_mask | (1u << k));
     }
   }
-  const Status st = pseudo_inverse(m.effectiveness, n, m.pinv, &m.pinv_info, options);
+  PinvMatrix pinv;
+  const Status st = pseudo_inverse(EffectivenessMatrix(m.effectiveness.map()), n, pinv, &m.pinv_info, options);
+  m.pinv = pinv;
   if (st == Status::invalid_argument) return st;
   for (int k = 0; k < 6; ++k) {
     real mx = 0;
@@ -68,7 +70,7 @@ void apply_pinv(const AllocationModel& model, const Vec6& wrench_cmd, real* thru
   // Cortex-M4F, where an indexed inner loop costs about 10.
   const real w0 = wrench_cmd(0), w1 = wrench_cmd(1), w2 = wrench_cmd(2);
   const real w3 = wrench_cmd(3), w4 = wrench_cmd(4), w5 = wrench_cmd(5);
-  const PinvMatrix& p = model.pinv;
+  const PlainMat<kMaxRotors, 6>& p = model.pinv;
   for (int i = 0; i < model.num_rotors; ++i) {
     real f = p(i, 0) * w0;
     f += p(i, 1) * w1;
@@ -85,7 +87,7 @@ namespace detail {
 Vec6 realized_wrench(const AllocationModel& model, const real* thrust_N) {
   // Six accumulators in registers, one contiguous column of A per motor (see apply_pinv).
   real w0 = 0, w1 = 0, w2 = 0, w3 = 0, w4 = 0, w5 = 0;
-  const EffectivenessMatrix& a = model.effectiveness;
+  const PlainMat<6, kMaxRotors>& a = model.effectiveness;
   for (int i = 0; i < model.num_rotors; ++i) {
     const real f = thrust_N[i];
     w0 += a(0, i) * f;

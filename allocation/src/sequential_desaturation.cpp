@@ -126,7 +126,7 @@ inline bool finish(const AllocationModel& model, Work<kN>& w, bool feasible, con
   const int n = w.count();
   std::uint16_t low = 0, high = 0;
   real r0 = 0, r1 = 0, r2 = 0, r3 = 0, r4 = 0, r5 = 0;
-  const EffectivenessMatrix& a = model.effectiveness;
+  const PlainMat<6, kMaxRotors>& a = model.effectiveness;
   for_rotors<kN>(n, [&](int i) __attribute__((always_inline)) {
     const real lo = w.lo[i], hi = w.hi[i];
     real f = w.f[i];
@@ -185,7 +185,7 @@ Status allocate(const AllocationModel& model, const SequentialDesaturationParams
   // has to give anything up (the common case in flight). PX4 mixes roll/pitch first even then,
   // which differs only when adding yaw would bring an out-of-range motor back in range; the exact
   // answer is kept here.
-  const PinvMatrix& p = model.pinv;
+  const PlainMat<kMaxRotors, 6>& p = model.pinv;
   const real w0 = wrench_cmd(kFx), w1 = wrench_cmd(kFy), w2 = wrench_cmd(kFz), w3 = wrench_cmd(kTx);
   const real w4 = wrench_cmd(kTy), w5 = wrench_cmd(kTz);
   bool feasible = true;

@@ -135,7 +135,7 @@ KESTREL_LEE_INLINE bool rotation_from_force_heading(const Vec3& f_w, real cos_ps
 // w x (J w), written out (Eigen's cross() is not always inlined on the MCU). With a diagonal J
 // (LeeState::inertia_diagonal) J w is three products: the skipped terms are 0 * w_k with w finite
 // (accept() checked it), so the bits are those of the full product.
-KESTREL_LEE_INLINE Vec3 gyroscopic(const Mat3& j_b, bool j_diagonal, const Vec3& w) {
+KESTREL_LEE_INLINE Vec3 gyroscopic(const PlainMat3& j_b, bool j_diagonal, const Vec3& w) {
   real jw0, jw1, jw2;
   if (j_diagonal) {
     jw0 = j_b(0, 0) * w[0];
@@ -162,7 +162,7 @@ KESTREL_LEE_INLINE real col_dot(const Mat3& r, int i, const Mat3& d, int j) {
 //    kRateRef = false skips it when w_d is identically zero (the compiler may not drop x * 0
 //    itself: that would change NaN/inf semantics).
 template <bool kRateRef>
-KESTREL_LEE_INLINE Vec3 lee_torque(const LeeGains& g, const Mat3& j_b, bool j_diagonal, const Mat3& r_wb, const Mat3& r_d,
+KESTREL_LEE_INLINE Vec3 lee_torque(const LeeGains& g, const PlainMat3& j_b, bool j_diagonal, const Mat3& r_wb, const Mat3& r_d,
                        const Vec3& w_b, const Vec3& w_d) {
   const real e_r0 = 0.5_r * (col_dot(r_wb, 1, r_d, 2) - col_dot(r_wb, 2, r_d, 1));
   const real e_r1 = 0.5_r * (col_dot(r_wb, 2, r_d, 0) - col_dot(r_wb, 0, r_d, 2));
@@ -374,16 +374,16 @@ Status validate_lee_params(const LeeParams& p) {
   // The upper bounds (lee.hpp) refuse parameters with which overflow in the update is unavoidable.
   if (!is_finite(p.mass_kg) || !(p.mass_kg > 0) || !(p.mass_kg <= kLeeMaxMassKg)) return Status::invalid_argument;
   if (!all_finite(p.inertia_b) || !all_finite(p.gravity_w)) return Status::invalid_argument;
-  if (!(p.inertia_b.cwiseAbs().maxCoeff() <= kLeeMaxInertiaKgm2)) return Status::invalid_argument;
-  if (!(p.gravity_w.cwiseAbs().maxCoeff() <= kLeeMaxGravityMps2)) return Status::invalid_argument;
+  if (!(p.inertia_b.map().cwiseAbs().maxCoeff() <= kLeeMaxInertiaKgm2)) return Status::invalid_argument;
+  if (!(p.gravity_w.map().cwiseAbs().maxCoeff() <= kLeeMaxGravityMps2)) return Status::invalid_argument;
   if (!is_finite(p.max_yaw_rate_radps) || !(p.max_yaw_rate_radps >= 0)) return Status::invalid_argument;
   if (!is_finite(p.action_min) || !is_finite(p.action_max) || !(p.action_min < p.action_max)) {
     return Status::invalid_argument;
   }
   const LeeGains& lo = p.gain_ranges.min;
   const LeeGains& hi = p.gain_ranges.max;
-  const Vec3* los[4] = {&lo.k_pos, &lo.k_vel, &lo.k_rot, &lo.k_angvel};
-  const Vec3* his[4] = {&hi.k_pos, &hi.k_vel, &hi.k_rot, &hi.k_angvel};
+  const PlainVec3* los[4] = {&lo.k_pos, &lo.k_vel, &lo.k_rot, &lo.k_angvel};
+  const PlainVec3* his[4] = {&hi.k_pos, &hi.k_vel, &hi.k_rot, &hi.k_angvel};
   for (int i = 0; i < 4; ++i) {
     if (!all_finite(*los[i]) || !all_finite(*his[i])) return Status::invalid_argument;
     for (int k = 0; k < 3; ++k) {
@@ -400,10 +400,10 @@ LeeGains lee_nominal_gains(const LeeGainRanges& r) {
   // (max + min) / 2 in this order, as Aerial Gym computes K_*_tensor_current: in float this gives
   // the golden gains bit for bit (e.g. (0.2f + 0.1f) / 2 = 0.150000006f).
   LeeGains g;
-  g.k_pos = (r.max.k_pos + r.min.k_pos) / 2;
-  g.k_vel = (r.max.k_vel + r.min.k_vel) / 2;
-  g.k_rot = (r.max.k_rot + r.min.k_rot) / 2;
-  g.k_angvel = (r.max.k_angvel + r.min.k_angvel) / 2;
+  g.k_pos = (r.max.k_pos.map() + r.min.k_pos.map()) / 2;
+  g.k_vel = (r.max.k_vel.map() + r.min.k_vel.map()) / 2;
+  g.k_rot = (r.max.k_rot.map() + r.min.k_rot.map()) / 2;
+  g.k_angvel = (r.max.k_angvel.map() + r.min.k_angvel.map()) / 2;
   return g;
 }
 
@@ -474,7 +474,7 @@ LeeParams lee_params_rov() {
 void lee_reset(const LeeParams& params, LeeState& state) {
   state = LeeState();
   state.gains = lee_nominal_gains(params.gain_ranges);
-  const Mat3& j = params.inertia_b;
+  const PlainMat3& j = params.inertia_b;
   state.inertia_diagonal = j(0, 1) == 0 && j(0, 2) == 0 && j(1, 0) == 0 && j(1, 2) == 0 && j(2, 0) == 0 && j(2, 1) == 0;
 }
 
@@ -510,8 +510,8 @@ Wrench update_lee_position(const LeeParams& p, LeeState& s, const RigidBodyState
   // Only R is needed (the heading is commanded): no attitude_frame(), whose yaw costs a sqrt.
   const Mat3 r_wb = rotation_of(b.orientation_wb);
   // a = K_pos (p_sp - p) + K_vel (0 - v), per component (no Eigen expression temporaries).
-  const Vec3& kp = s.gains.k_pos;
-  const Vec3& kv = s.gains.k_vel;
+  const PlainVec3& kp = s.gains.k_pos;
+  const PlainVec3& kv = s.gains.k_vel;
   const Vec3 accel_w(kp[0] * (a0 - b.position_w[0]) - kv[0] * b.linvel_w[0],
                      kp[1] * (a1 - b.position_w[1]) - kv[1] * b.linvel_w[1],
                      kp[2] * (a2 - b.position_w[2]) - kv[2] * b.linvel_w[2]);
@@ -527,7 +527,7 @@ Wrench update_lee_velocity(const LeeParams& p, LeeState& s, const RigidBodyState
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
   const AttitudeFrame fr = frame_of(b.orientation_wb);
   // The position term K_pos (p - p) is exactly zero and left out.
-  const Vec3 accel_w = s.gains.k_vel.cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
+  const Vec3 accel_w = s.gains.k_vel.map().cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
   const Vec3 w_d = clamp_body_yaw_rate(body_rate_of_yaw_rate(fr.r_wb, a[3]), p.max_yaw_rate_radps);
   // Heading = current yaw (quirk 5): yaw is steered by the rate term only.
   return finish_force_heading<true>(p, s, b, fr.r_wb, accel_w, fr.cos_yaw, fr.sin_yaw, w_d, faults);
@@ -539,7 +539,7 @@ Wrench update_lee_velocity_steering_angle(const LeeParams& p, LeeState& s, const
   std::uint32_t faults = 0;
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
   const AttitudeFrame fr = frame_of(b.orientation_wb);
-  const Vec3 accel_w = s.gains.k_vel.cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
+  const Vec3 accel_w = s.gains.k_vel.map().cwiseProduct(vehicle_to_world(fr, a[0], a[1], a[2]) - b.linvel_w);
   real c_psi, s_psi;
   sin_cos(a[3], s_psi, c_psi);
   return finish_force_heading<false>(p, s, b, fr.r_wb, accel_w, c_psi, s_psi, Vec3::Zero(), faults);
@@ -551,7 +551,7 @@ Wrench update_lee_acceleration(const LeeParams& p, LeeState& s, const RigidBodyS
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
   const AttitudeFrame fr = frame_of(b.orientation_wb);
   const Vec3 accel_w(a[0], a[1], a[2]);
-  const Vec3 f_w = (accel_w - p.gravity_w) * p.mass_kg;
+  const Vec3 f_w = (accel_w - p.gravity_w.map()) * p.mass_kg;
   const real fz = f_w.dot(fr.r_wb.col(2));
   // Quirk 4, reproduced because the golden data records it: the reference takes
   // pitch_d = atan2(Fx, Fz), roll_d = atan2(-Fy, sqrt(Fx^2 + Fz^2)) from the WORLD-frame force as
@@ -586,7 +586,7 @@ Wrench update_lee_attitude(const LeeParams& p, LeeState& s, const RigidBodyState
   if (!accept(p, s, b, action, kLeeActionDim, a, faults)) return s.last_safe_wrench_b;
   const AttitudeFrame fr = frame_of(b.orientation_wb);
   // Not tilt-compensated (quirk 5): the command scales the hover thrust.
-  const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.norm();
+  const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.map().norm();
   real cp, sp, cr, sr;
   sin_cos(a[2], sp, cp);
   sin_cos(a[1], sr, cr);
@@ -604,12 +604,12 @@ Wrench update_lee_rates(const LeeParams& p, LeeState& s, const RigidBodyState& b
   // for one environment would have read the command as a vertical acceleration offset. We use the
   // attitude controller's convention instead, so the two controllers share one thrust meaning:
   // fz = (command + 1) m |g| (command 0 = hover thrust).
-  const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.norm();
+  const real fz = (a[0] + 1) * p.mass_kg * p.gravity_w.map().norm();
   // The reference calls its torque routine with R_d = R, i.e. E = I (up to rounding): e_R = 0 and
   // e_w = w - w_d. Quirk 2: it clamps the body-z rate in the caller's action buffer; we clamp a copy.
   const Vec3 w_d = clamp_body_yaw_rate(Vec3(a[1], a[2], a[3]), p.max_yaw_rate_radps);
   const Vec3& w = b.angvel_b;
-  const Vec3 tau = -s.gains.k_angvel.cwiseProduct(w - w_d) + gyroscopic(p.inertia_b, s.inertia_diagonal, w);
+  const Vec3 tau = -s.gains.k_angvel.map().cwiseProduct(w - w_d) + gyroscopic(p.inertia_b, s.inertia_diagonal, w);
   return commit(s, Vec3(0, 0, fz), tau, Vec3::Zero(), xyzw_nonneg_w(b.orientation_wb), w_d, faults);
 }
 
@@ -630,8 +630,8 @@ Wrench update_rov_fully_actuated(const LeeParams& p, LeeState& s, const RigidBod
     faults |= kFaultSingular;
   }
   const Vec3 accel_w =
-      s.gains.k_pos.cwiseProduct(Vec3(a[0], a[1], a[2]) - b.position_w) - s.gains.k_vel.cwiseProduct(b.linvel_w);
-  const Vec3 f_w = (accel_w - p.gravity_w) * p.mass_kg;
+      s.gains.k_pos.map().cwiseProduct(Vec3(a[0], a[1], a[2]) - b.position_w) - s.gains.k_vel.map().cwiseProduct(b.linvel_w);
+  const Vec3 f_w = (accel_w - p.gravity_w.map()) * p.mass_kg;
   const Vec3 f_b = r_wb.transpose() * f_w;  // all three components: the ROV is fully actuated
   const Mat3 r_d = rotation_of(quat_from_xyzw(q_d));
   const Vec3 tau = lee_torque<false>(s.gains, p.inertia_b, s.inertia_diagonal, r_wb, r_d, b.angvel_b, Vec3::Zero());

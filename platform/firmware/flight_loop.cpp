@@ -31,8 +31,8 @@ Status flight_init(FlightStack& s, Plant& p) {
 
   RigidBodyParams bp;
   bp.mass_kg = m.ctrl.lee.mass_kg;
-  bp.inertia_b = m.ctrl.lee.inertia_b;
-  bp.gravity_w = m.ctrl.lee.gravity_w;
+  bp.inertia_b = m.ctrl.lee.inertia_b.map();
+  bp.gravity_w = m.ctrl.lee.gravity_w.map();
   bp.integrator = Integrator::rk4;
   if (const Status st = make_rigid_body_model(bp, p.body); st != Status::ok) return st;
   p.state = RigidBodyState();

@@ -94,8 +94,8 @@ Status hexa_init(const HexaConfig& c, HexaStack& s, HexaPlant& p) {
 
   RigidBodyParams bp;
   bp.mass_kg = s.model.ctrl.lee.mass_kg;
-  bp.inertia_b = s.model.ctrl.lee.inertia_b;
-  bp.gravity_w = s.model.ctrl.lee.gravity_w;
+  bp.inertia_b = s.model.ctrl.lee.inertia_b.map();
+  bp.gravity_w = s.model.ctrl.lee.gravity_w.map();
   bp.integrator = Integrator::rk4;
   if (const Status st = make_rigid_body_model(bp, p.body); st != Status::ok) return st;
   p.state = RigidBodyState();
@@ -119,7 +119,7 @@ Status hexa_fly(const HexaConfig& c, HexaStack& s, HexaPlant& p, HexaClockFn clo
   const real k_ratio_x = s.state.ctrl.lee.gains.k_rot[0] / s.state.ctrl.lee.gains.k_angvel[0];
   const real k_ratio_y = s.state.ctrl.lee.gains.k_rot[1] / s.state.ctrl.lee.gains.k_angvel[1];
   const real k_ratio_z = s.state.ctrl.lee.gains.k_rot[2] / s.state.ctrl.lee.gains.k_angvel[2];
-  const real mg = s.model.ctrl.lee.mass_kg * s.model.ctrl.lee.gravity_w.norm();
+  const real mg = s.model.ctrl.lee.mass_kg * s.model.ctrl.lee.gravity_w.map().norm();
   const Quat mount_nominal = Quat::Identity();
 
   real carrot_x = 0;

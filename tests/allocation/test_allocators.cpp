@@ -231,7 +231,7 @@ KTEST(Alloc, RandomCommandsStayWithinLimitsForEveryPresetAndAllocator) {
           KEXPECT_LE(out.thrust_N[i], g_model.thrust_max_N[i]);
         }
         const Vec6 realized =
-            no_heap([&] { return wrench_from_thrusts(g_model.effectiveness, spec.num_rotors, out.thrust_N); });
+            no_heap([&] { return wrench_from_thrusts(EffectivenessMatrix(g_model.effectiveness.map()), spec.num_rotors, out.thrust_N); });
         for (int k = 0; k < 6; ++k) {
           KEXPECT_EQ(out.wrench_realized(k), realized(k));
           KEXPECT_NEAR(out.wrench_unallocated(k) + out.wrench_realized(k), w(k), 1e-5 * (1 + std::fabs(w(k))));

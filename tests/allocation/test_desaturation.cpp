@@ -136,7 +136,7 @@ namespace {
 /// starts from f0 itself (to rounding); the command has no fx, fy.
 Vec6 wrench_of(const real* f0) {
   Vec6 w = Vec6::Zero();
-  for (int i = 0; i < 4; ++i) w += g_model.effectiveness.col(i) * f0[i];
+  for (int i = 0; i < 4; ++i) w += g_model.effectiveness.map().col(i) * f0[i];
   return w;
 }
 }  // namespace

@@ -145,7 +145,7 @@ KTEST(Pinv, DeadMotorDropsRankAndGetsZeroRow) {
   KEXPECT_EQ(static_cast<int>(build_preset(kBaseOctarotor, g_airframe, g_model, h)), static_cast<int>(Status::ok));
   KEXPECT_EQ(g_model.pinv_info.rank, 6);
   for (int k = 0; k < 6; ++k) KEXPECT_EQ(g_model.pinv(5, k), real(0));
-  const PenroseErrors e = penrose(g_model.effectiveness, g_model.pinv, 8);
+  const PenroseErrors e = penrose(g_model.effectiveness.map(), g_model.pinv.map(), 8);
   KEXPECT_LT(e.a_ap_a, kPenroseTol);
   KEXPECT_LT(e.ap_a_ap, kPenroseTol);
 }

@@ -389,9 +389,9 @@ KTEST(LeeController, GainRandomisationIsReproducibleAndInRange) {
   for (std::uint32_t inst = 0; inst < 200; ++inst) {
     RngStream rng(99, inst, kPurposeGains);
     const LeeGains g = randomize_lee_gains(r, rng);
-    const Vec3* v[4] = {&g.k_pos, &g.k_vel, &g.k_rot, &g.k_angvel};
-    const Vec3* mn[4] = {&r.min.k_pos, &r.min.k_vel, &r.min.k_rot, &r.min.k_angvel};
-    const Vec3* mx[4] = {&r.max.k_pos, &r.max.k_vel, &r.max.k_rot, &r.max.k_angvel};
+    const PlainVec3* v[4] = {&g.k_pos, &g.k_vel, &g.k_rot, &g.k_angvel};
+    const PlainVec3* mn[4] = {&r.min.k_pos, &r.min.k_vel, &r.min.k_rot, &r.min.k_angvel};
+    const PlainVec3* mx[4] = {&r.max.k_pos, &r.max.k_vel, &r.max.k_rot, &r.max.k_angvel};
     for (int i = 0; i < 4; ++i) {
       for (int k = 0; k < 3; ++k) {
         KEXPECT_GE((*v[i])[k], (*mn[i])[k]);
@@ -439,8 +439,8 @@ KTEST(LeeController, ClosedLoopPositionConvergesToSetpoint) {
   lee_reset(p, s);
   RigidBodyParams bp;
   bp.mass_kg = p.mass_kg;
-  bp.inertia_b = p.inertia_b;
-  bp.gravity_w = p.gravity_w;
+  bp.inertia_b = p.inertia_b.map();
+  bp.gravity_w = p.gravity_w.map();
   bp.integrator = Integrator::rk4;
   RigidBodyModel model;
   KASSERT_TRUE(make_rigid_body_model(bp, model) == Status::ok);

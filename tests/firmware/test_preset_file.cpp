@@ -130,8 +130,8 @@ void fly(const Presets& p, Trace& out) {
   ASSERT_EQ(al::motor_model_reset(p.motors, motors, rng, idle), Status::ok);
   kestrel::RigidBodyParams bp;
   bp.mass_kg = p.lee.mass_kg;
-  bp.inertia_b = p.lee.inertia_b;
-  bp.gravity_w = p.lee.gravity_w;
+  bp.inertia_b = p.lee.inertia_b.map();
+  bp.gravity_w = p.lee.gravity_w.map();
   bp.integrator = kestrel::Integrator::rk4;
   kestrel::RigidBodyModel body;
   ASSERT_EQ(kestrel::make_rigid_body_model(bp, body), Status::ok);

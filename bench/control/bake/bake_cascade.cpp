@@ -59,22 +59,22 @@ std::string list(const T* v, int n, const char* field) {
   return s + "}";
 }
 
+std::string gains_initialiser(const kestrel::LeeGains& g, const char* field) {
+  return "{" + list(g.k_pos.data(), 3, field) + ", " + list(g.k_vel.data(), 3, field) + ", " +
+         list(g.k_rot.data(), 3, field) + ", " + list(g.k_angvel.data(), 3, field) + "}";
+}
+
+// LeeParams' aggregate initialiser, its members in declaration order (a member added to
+// LeeParams and missed here fails kestrel_cascade_capacity_parity's field-by-field comparison).
 std::string lee_initialiser(const kestrel::LeeParams& p) {
-  real gmin[12], gmax[12];
-  const kestrel::LeeGains* g[2] = {&p.gain_ranges.min, &p.gain_ranges.max};
-  real* dst[2] = {gmin, gmax};
-  for (int r = 0; r < 2; ++r) {
-    const kestrel::Vec3* v[4] = {&g[r]->k_pos, &g[r]->k_vel, &g[r]->k_rot, &g[r]->k_angvel};
-    for (int k = 0; k < 4; ++k)
-      for (int i = 0; i < 3; ++i) dst[r][3 * k + i] = (*v[k])(i);
-  }
   std::string s = "{\n";
   s += "    /*mass_kg*/ " + hexf(p.mass_kg, "mass_kg") + ",\n";
-  s += "    /*inertia_b*/ " + list(p.inertia_b.data(), 9, "inertia_b") + ",\n";
+  s += "    /*inertia_b (column-major)*/ " + list(p.inertia_b.data(), 9, "inertia_b") + ",\n";
   s += "    /*gravity_w*/ " + list(p.gravity_w.data(), 3, "gravity_w") + ",\n";
   s += "    /*max_yaw_rate_radps*/ " + hexf(p.max_yaw_rate_radps, "max_yaw_rate_radps") + ",\n";
-  s += "    /*gains_min*/ " + list(gmin, 12, "gain_ranges.min") + ",\n";
-  s += "    /*gains_max*/ " + list(gmax, 12, "gain_ranges.max") + ",\n";
+  s += "    /*gain_ranges {min, max} of {k_pos, k_vel, k_rot, k_angvel}*/ {\n        " +
+       gains_initialiser(p.gain_ranges.min, "gain_ranges.min") + ",\n        " +
+       gains_initialiser(p.gain_ranges.max, "gain_ranges.max") + "},\n";
   s += std::string("    /*randomize_gains*/ ") + (p.randomize_gains ? "true" : "false") + ",\n";
   s += "    /*action_min*/ " + hexf(p.action_min, "action_min") + ",\n";
   s += "    /*action_max*/ " + hexf(p.action_max, "action_max") + ",\n}";
@@ -100,16 +100,12 @@ std::string model_initialiser(const al::AllocationModel& m) {
        std::to_string(i.rank) + ", " + std::to_string(i.sweeps) + ", " + std::to_string(i.rotations) + ", " +
        (i.converged ? "true" : "false") + ", " + hexf(i.sigma_max, "pinv_info.sigma_max") + ", " +
        hexf(i.sigma_min_kept, "pinv_info.sigma_min_kept") + "},\n";
-  s += "    /*fault_bits*/ " + std::to_string(m.faults.bits) + "u,\n}";
+  s += "    /*faults*/ {" + std::to_string(m.faults.bits) + "u},\n}";
   return s;
 }
 
 std::string lee_state_initialiser(const kestrel::LeeState& st) {
-  const kestrel::Vec3* v[4] = {&st.gains.k_pos, &st.gains.k_vel, &st.gains.k_rot, &st.gains.k_angvel};
-  real g[12];
-  for (int k = 0; k < 4; ++k)
-    for (int i = 0; i < 3; ++i) g[3 * k + i] = (*v[k])(i);
-  return "{\n    /*gains*/ " + list(g, 12, "gains") + ",\n    /*inertia_diagonal*/ " +
+  return "{\n    /*gains*/ " + gains_initialiser(st.gains, "gains") + ",\n    /*inertia_diagonal*/ " +
          (st.inertia_diagonal ? "true" : "false") + ",\n}";
 }
 
@@ -179,8 +175,8 @@ int main(int argc, char** argv) {
                "#include \"kestrel/allocation/sequential_desaturation.hpp\"\n\n"
                "static_assert(kestrel::allocation::kMaxRotors == 4, \"generated for KESTREL_MAX_ROTORS=4\");\n\n"
                "namespace kestrel::baked {\n\n"
-               "inline constexpr LeeParamsData kLeeBaseQuadrotor = %s;\n\n"
-               "inline constexpr AllocationModelData kModelBaseQuadrotor = %s;\n\n"
+               "inline constexpr LeeParams kLeeBaseQuadrotor = %s;\n\n"
+               "inline constexpr allocation::AllocationModel kModelBaseQuadrotor = %s;\n\n"
                "inline constexpr allocation::SequentialDesaturationParams kDesat = {\n"
                "    /*airmode*/ static_cast<allocation::Airmode>(%d), /*yaw_headroom*/ %s};\n\n"
                "// Initial state: lee_reset(kLeeBaseQuadrotor) and motor_model_reset(kBaseQuadrotorMotors,\n"

@@ -174,16 +174,16 @@ int main() {
   {
     // The on-board set-up above is only the reference; the cascade below runs on the baked data.
     static Stack baked;
-    baked::load(baked::kLeeBaseQuadrotor, baked.lee);
+    baked.lee = baked::kLeeBaseQuadrotor;
     baked::load(baked::kLeeStateInitial, baked.lee_state);
-    baked::load(baked::kModelBaseQuadrotor, baked.model);
+    baked.model = baked::kModelBaseQuadrotor;
     baked.desat = baked::kDesat;
     baked.motors = baked::kMotorsInitial;
     if (!baked_matches_on_board(s, baked)) return 1;
     s = Stack();  // nothing of the on-board result can leak into the run below
-    baked::load(baked::kLeeBaseQuadrotor, s.lee);
+    s.lee = baked::kLeeBaseQuadrotor;
     baked::load(baked::kLeeStateInitial, s.lee_state);
-    baked::load(baked::kModelBaseQuadrotor, s.model);
+    s.model = baked::kModelBaseQuadrotor;
     s.desat = baked::kDesat;
     s.motors = baked::kMotorsInitial;
   }

@@ -232,7 +232,7 @@ int main() {
   }
   RigidBodyParams bp;
   bp.mass_kg = g_quad.lee.mass_kg;
-  bp.inertia_b = g_quad.lee.inertia_b;
+  bp.inertia_b = g_quad.lee.inertia_b.map();
   bp.integrator = Integrator::rk4;
   ok = make_rigid_body_model(bp, g_body_model) == Status::ok && ok;
   ok = kestrel_init(&g_capi, KESTREL_PRESET_BASE_QUADROTOR) == KESTREL_OK && ok;

@@ -16,8 +16,8 @@
 //                          parameters generated at build time on the host (baked_cascade.hpp):
 //                          no presets, airframe, pseudo-inverse or reset code on board, the
 //                          desaturation parameters in flash, the allocator and motor states
-//                          constant-initialised; LeeParams, LeeState and the model are copied
-//                          from flash tables into RAM at start-up (Eigen members: see there);
+//                          constant-initialised, LeeParams and the allocation model read in
+//                          place from flash; only LeeState is copied from a table at start-up;
 //   KESTREL_STACK_CAPI     the same through the C API (every controller kind reachable);
 //   KESTREL_STACK_POLICY   the trained position policy as a command source, alone: what
 //                          policy_loop.cpp runs before Lee velocity control (observation builder
@@ -67,19 +67,18 @@ using kestrel::real;
 // motor fails) and the state of each stage. The airframe description is needed only to build
 // the model and the per-step allocation result is an output, so both live on the stack.
 #if defined(KESTREL_STACK_BAKED)
-// Baked: the desaturation parameters are constants in flash; the allocator and motor states hold
-// no Eigen member, so they are constant-initialised (zero, and the baked motor_model_reset result
-// in .data) and need no start-up code. LeeParams, the model and LeeState hold Eigen matrices,
-// which cannot be constant-initialised (baked_cascade.hpp), so they stay in RAM, filled from the
-// flash tables at start-up.
+// Baked: LeeParams, the allocation model and the desaturation parameters are constexpr objects in
+// flash that the per-step functions read in place; the allocator and motor states hold no Eigen
+// member, so they are constant-initialised (zero, and the baked motor_model_reset result in
+// .data). Only LeeState, which holds Eigen members, is filled at start-up (from a flash table).
 struct Stack {
-  kestrel::LeeParams lee;
   kestrel::LeeState lee_state;
-  al::AllocationModel model;
 };
 Stack g_stack;
 al::AllocatorState g_alloc_state;
 al::MotorModelState g_motors = kestrel::baked::kMotorsInitial;
+const kestrel::LeeParams& lee_params(const Stack&) { return kestrel::baked::kLeeBaseQuadrotor; }
+const al::AllocationModel& model(const Stack&) { return kestrel::baked::kModelBaseQuadrotor; }
 const al::SequentialDesaturationParams& desat_params(const Stack&) { return kestrel::baked::kDesat; }
 al::AllocatorState& alloc_state(Stack&) { return g_alloc_state; }
 al::MotorModelState& motors(Stack&) { return g_motors; }
@@ -93,6 +92,8 @@ struct Stack {
   al::MotorModelState motors;
 };
 Stack g_stack;
+const kestrel::LeeParams& lee_params(const Stack& s) { return s.lee; }
+const al::AllocationModel& model(const Stack& s) { return s.model; }
 const al::SequentialDesaturationParams& desat_params(const Stack& s) { return s.desat; }
 al::AllocatorState& alloc_state(Stack& s) { return s.alloc_state; }
 al::MotorModelState& motors(Stack& s) { return s.motors; }
@@ -108,9 +109,9 @@ __attribute__((noinline)) void cascade_step(Stack& s, const real (&in)[13], bool
   if (first) b.orientation_wb = Quat::Identity();
   b.angvel_b = Vec3(in[10], in[11], in[12]);
   const real cmd[4] = {0, 0, 1, 0};
-  const Wrench w = update_lee_position(s.lee, s.lee_state, b, cmd);
+  const Wrench w = update_lee_position(lee_params(s), s.lee_state, b, cmd);
   al::AllocationResult alloc_out;
-  (void)al::allocate_sequential_desaturation(s.model, desat_params(s), alloc_state(s), w, alloc_out);
+  (void)al::allocate_sequential_desaturation(model(s), desat_params(s), alloc_state(s), w, alloc_out);
   (void)al::motor_model_step(al::kBaseQuadrotorMotors, motors(s), alloc_out.thrust_N, 0.002_r);
   for (int i = 0; i < 4; ++i) g_out[i] = motors(s).thrust_N[i];
 }
@@ -119,9 +120,7 @@ __attribute__((noinline)) bool setup(Stack& s) {
   using namespace kestrel;
 #if defined(KESTREL_STACK_BAKED)
   // The whole set-up: copies of build-time constants (a re-arm would copy them again).
-  baked::load(baked::kLeeBaseQuadrotor, s.lee);
   baked::load(baked::kLeeStateInitial, s.lee_state);
-  baked::load(baked::kModelBaseQuadrotor, s.model);
   return true;
 #else
   s.lee = lee_params_base_quadrotor();

@@ -281,10 +281,10 @@ kestrel_status kestrel_default_params(std::int32_t preset, kestrel_params* p) {
   p->preset = preset;
   p->mass_kg = static_cast<float>(mass);
   for (int i = 0; i < 3; ++i) p->inertia_diag_kgm2[i] = static_cast<float>(q.inertia_b(i, i) * inertia_scale);
-  set3(p->k_pos, g.k_pos);
-  set3(p->k_vel, g.k_vel);
-  set3(p->k_rot, g.k_rot * inertia_scale);
-  set3(p->k_angvel, g.k_angvel * inertia_scale);
+  set3(p->k_pos, g.k_pos.map());
+  set3(p->k_vel, g.k_vel.map());
+  set3(p->k_rot, g.k_rot.map() * inertia_scale);
+  set3(p->k_angvel, g.k_angvel.map() * inertia_scale);
   p->max_yaw_rate_radps = static_cast<float>(q.max_yaw_rate_radps);
   p->yaw_headroom = static_cast<float>(al::SequentialDesaturationParams().yaw_headroom);
   p->use_motor_model = 1;

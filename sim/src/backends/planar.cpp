@@ -919,7 +919,7 @@ class PlanarSimulator final : public Simulator {
     (void)robots::multirotor_control(mr_, mr_.controller, mr, st, action, kMaxActionDim, out.command);
     const real m = mass(i);
     const Vec3 a_cmd = mr.ctrl.lee.accel_command_w;
-    const Vec3 f_des = m * (a_cmd - mr_.ctrl.lee.gravity_w);
+    const Vec3 f_des = m * (a_cmd - mr_.ctrl.lee.gravity_w.map());
     const real yaw_torque = out.command.wrench_b.torque_b[2];
     out.command.is_wrench = true;
     out.command.wrench_b.force_b = Vec3(0, 0, f_des.norm());

@@ -257,8 +257,8 @@ class RigidSimulator final : public Simulator {
   real gain_ratio(const LeeGains& g) const {
     real sum = 0;
     int n = 0;
-    const Vec3* a[4] = {&g.k_pos, &g.k_vel, &g.k_rot, &g.k_angvel};
-    const Vec3* b[4] = {&nominal_.k_pos, &nominal_.k_vel, &nominal_.k_rot, &nominal_.k_angvel};
+    const PlainVec3* a[4] = {&g.k_pos, &g.k_vel, &g.k_rot, &g.k_angvel};
+    const PlainVec3* b[4] = {&nominal_.k_pos, &nominal_.k_vel, &nominal_.k_rot, &nominal_.k_angvel};
     for (int j = 0; j < 4; ++j)
       for (int k = 0; k < 3; ++k)
         if ((*b[j])[k] != 0) {

@@ -126,7 +126,7 @@ bool compile_multirotor(const WorldConfig& config, robots::MultirotorModel& m, s
     m.ctrl.lee.action_max = cc.action_max;
   }
   m.ctrl.lee.mass_kg = rc.mass_kg;
-  m.ctrl.lee.inertia_b = rc.inertia_diag_kg_m2.asDiagonal();
+  m.ctrl.lee.inertia_b = Mat3(rc.inertia_diag_kg_m2.asDiagonal());
   m.ctrl.lee.gravity_w = config.sim.gravity_w;
   m.ctrl.lee.randomize_gains = cc.randomize_gains;
   // Lee parameters are checked for every kind (a direct-motor world still reports them).

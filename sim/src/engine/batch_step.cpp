@@ -84,7 +84,7 @@ bool eligible(const Models& m) {
       m.body == nullptr)
     return false;
   const LeeParams& lp = m.ctrl->lee;
-  const Mat3& j = lp.inertia_b;
+  const PlainMat3& j = lp.inertia_b;
   const bool diag = j(0, 1) == 0 && j(0, 2) == 0 && j(1, 0) == 0 && j(1, 2) == 0 && j(2, 0) == 0 && j(2, 1) == 0;
   const al::MotorModelConfig& mc = *m.motor;
   return state_layout_ok() && m.controller == ControllerKind::lee_position && diag && m.alloc->num_rotors == 4 &&

@@ -38,8 +38,10 @@ struct MotorHealth {
 /// Read-only allocation data derived from an airframe and the motor health.
 struct AllocationModel {
   int num_rotors = 0;
-  EffectivenessMatrix effectiveness = EffectivenessMatrix::Zero();  // A, dead columns zeroed
-  PinvMatrix pinv = PinvMatrix::Zero();                             // A+ of `effectiveness`
+  // Plain arrays (PlainMat, kernel/types.hpp: use .map() in expressions) so that a model baked at
+  // build time is constant-initialised into flash.
+  PlainMat<6, kMaxRotors> effectiveness = {};  // A, dead columns zeroed
+  PlainMat<kMaxRotors, 6> pinv = {};           // A+ of `effectiveness`
   real pinv_col_abs_max[6] = {};       // largest |entry| of each A+ column (desaturation thresholds)
   // Bit i of entry k: |A+(i, k)| > 1e-6 pinv_col_abs_max[k], i.e. motor i can be moved along
   // wrench axis k (the desaturation test, precomputed so the hot path tests a bit).

@@ -39,10 +39,11 @@ namespace kestrel {
 
 /// Per-axis gains of the Lee controllers (element-wise products, as Aerial Gym's tensors).
 struct LeeGains {
-  Vec3 k_pos = Vec3::Zero();     // (m/s^2) per m of position error
-  Vec3 k_vel = Vec3::Zero();     // (m/s^2) per m/s of velocity error
-  Vec3 k_rot = Vec3::Zero();     // N m per unit of attitude error e_R
-  Vec3 k_angvel = Vec3::Zero();  // N m per rad/s of rate error
+  // Plain arrays (PlainVec3, kernel/types.hpp) so that LeeParams can be constant-initialised.
+  PlainVec3 k_pos = {};     // (m/s^2) per m of position error
+  PlainVec3 k_vel = {};     // (m/s^2) per m/s of velocity error
+  PlainVec3 k_rot = {};     // N m per unit of attitude error e_R
+  PlainVec3 k_angvel = {};  // N m per rad/s of rate error
 };
 
 /// Inclusive ranges of each gain component. Aerial Gym starts every instance at the midpoint and,
@@ -54,8 +55,8 @@ struct LeeGainRanges {
 
 struct LeeParams {
   real mass_kg = 0;
-  Mat3 inertia_b = Mat3::Zero();  // kg m^2, about the centre of mass, body axes
-  Vec3 gravity_w = Vec3(0, 0, -kStandardGravity);  // m/s^2
+  PlainMat3 inertia_b = {};  // kg m^2, about the centre of mass, body axes
+  PlainVec3 gravity_w = {0, 0, -kStandardGravity};  // m/s^2
   real max_yaw_rate_radps = 0;  // clamp on the body-z component of the desired body rate
   LeeGainRanges gain_ranges;    // nominal gains = midpoints; min = max fixes a gain
   bool randomize_gains = false; // lee_reset(..., rng) draws gains only when set

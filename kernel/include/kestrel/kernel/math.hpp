@@ -21,6 +21,11 @@ inline bool all_finite(const Eigen::MatrixBase<Derived>& m) {
   return true;
 }
 
+template <int Rows, int Cols>
+inline bool all_finite(const PlainMat<Rows, Cols>& m) {
+  return all_finite(m.map());
+}
+
 inline bool all_finite(const real* v, int n) {
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(v[i])) return false;

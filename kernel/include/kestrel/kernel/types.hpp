@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -37,6 +38,58 @@ using Vec4 = Mat<4, 1>;
 using Vec6 = Mat<6, 1>;
 using Mat3 = Mat<3, 3>;
 using Quat = Eigen::Quaternion<real, Eigen::DontAlign>;
+
+/// A fixed-size matrix held as a plain array in Eigen's storage order (column-major), for the
+/// read-only parameter structs (LeeParams, AllocationModel). Why not a Mat there: Eigen 3.4's
+/// constructors are not constexpr, so an object holding an Eigen matrix can never be
+/// constant-initialised; GCC places even a `const` one in RAM and fills it at start-up. An
+/// aggregate of plain arrays is constant-initialised, so a `const LeeParams` baked at build time
+/// stays in flash (the 512-byte-RAM control stack, bench/control/mcu/baked_cascade.hpp).
+/// Element access and assignment from Eigen work as on a Mat; in expressions use map(), a view
+/// that costs nothing (the same loads an Eigen member would compile to).
+template <int Rows, int Cols = 1>
+struct PlainMat {
+  using Matrix = Mat<Rows, Cols>;
+  real v[Rows * Cols];
+
+  constexpr PlainMat() : v{} {}
+  /// All Rows * Cols entries in storage order: `PlainVec3 g_w = {0, 0, -9.81f};` (constexpr).
+  template <typename... T, typename = std::enable_if_t<sizeof...(T) == Rows * Cols && sizeof...(T) != 1 &&
+                                                        (std::is_arithmetic_v<T> && ...)>>
+  constexpr PlainMat(T... entries) : v{static_cast<real>(entries)...} {}  // NOLINT(google-explicit-constructor)
+  /// From any Eigen matrix expression of this size (set-up code: `gains.k_pos = Vec3(...)`).
+  template <typename Derived>
+  PlainMat(const Eigen::MatrixBase<Derived>& m) : v{} {  // NOLINT(google-explicit-constructor)
+    map() = m;
+  }
+
+  Eigen::Map<Matrix> map() { return Eigen::Map<Matrix>(v); }
+  Eigen::Map<const Matrix> map() const { return Eigen::Map<const Matrix>(v); }
+  // No implicit conversion to Matrix: passing one where a `const Mat&` is expected would copy the
+  // whole matrix on every call, silently (a 12 x 6 model is 288 bytes per hot-path call).
+  template <typename Derived>
+  PlainMat& operator=(const Eigen::MatrixBase<Derived>& m) {
+    map() = m;
+    return *this;
+  }
+  constexpr real& operator()(int i) { return v[i]; }
+  constexpr const real& operator()(int i) const { return v[i]; }
+  PlainMat& operator*=(real s) {
+    for (real& x : v) x *= s;
+    return *this;
+  }
+  /// Exact, element by element (as Eigen's == on matrices).
+  friend bool operator==(const PlainMat& a, const PlainMat& b) { return a.map() == b.map(); }
+  friend bool operator!=(const PlainMat& a, const PlainMat& b) { return !(a == b); }
+  constexpr real& operator[](int i) { return v[i]; }
+  constexpr const real& operator[](int i) const { return v[i]; }
+  constexpr real& operator()(int row, int col) { return v[row + Rows * col]; }
+  constexpr const real& operator()(int row, int col) const { return v[row + Rows * col]; }
+  real* data() { return v; }
+  const real* data() const { return v; }
+};
+using PlainVec3 = PlainMat<3, 1>;
+using PlainMat3 = PlainMat<3, 3>;
 
 /// Literal helper so constants follow the build's scalar type without double promotion.
 constexpr real operator""_r(long double v) { return static_cast<real>(v); }

@@ -183,10 +183,10 @@ struct ControllerConfig {
   std::string name = "lee_position_control";
   ControllerKind kind = ControllerKind::lee_position;
   bool randomize_gains = false;
-  Vec3 k_pos_min = lee_gain_ranges_default().min.k_pos, k_pos_max = lee_gain_ranges_default().max.k_pos;  // (m/s^2) per m
-  Vec3 k_vel_min = lee_gain_ranges_default().min.k_vel, k_vel_max = lee_gain_ranges_default().max.k_vel;  // (m/s^2) per m/s
-  Vec3 k_rot_min = lee_gain_ranges_default().min.k_rot, k_rot_max = lee_gain_ranges_default().max.k_rot;  // N m per unit of e_R
-  Vec3 k_angvel_min = lee_gain_ranges_default().min.k_angvel, k_angvel_max = lee_gain_ranges_default().max.k_angvel;  // N m per rad/s
+  Vec3 k_pos_min = lee_gain_ranges_default().min.k_pos.map(), k_pos_max = lee_gain_ranges_default().max.k_pos.map();  // (m/s^2) per m
+  Vec3 k_vel_min = lee_gain_ranges_default().min.k_vel.map(), k_vel_max = lee_gain_ranges_default().max.k_vel.map();  // (m/s^2) per m/s
+  Vec3 k_rot_min = lee_gain_ranges_default().min.k_rot.map(), k_rot_max = lee_gain_ranges_default().max.k_rot.map();  // N m per unit of e_R
+  Vec3 k_angvel_min = lee_gain_ranges_default().min.k_angvel.map(), k_angvel_max = lee_gain_ranges_default().max.k_angvel.map();  // N m per rad/s
   real max_yaw_rate_rad_s = kPi / 3;  // LeeParams::max_yaw_rate_radps
   real action_min = -10, action_max = 10;  // every action component clipped to [min, max]
 };
