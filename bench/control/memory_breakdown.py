@@ -4,8 +4,9 @@
 
     bench/control/memory_breakdown.py <empty.elf> <image.elf> [out.csv]
 
-Roles come from the linked image's own call graph (arm-none-eabi-objdump -d: `bl`/`b` targets,
-so inlining is already accounted for): per-step code is everything reachable from cascade_step
+Roles come from the linked image's own call graph (arm-none-eabi-objdump -d: `bl`/`b` targets;
+RISC-V, with KESTREL_BINUTILS_PREFIX=riscv64-unknown-elf-: `jal`/`j` targets and `jalr` with a
+resolved target; so inlining is already accounted for): per-step code is everything reachable from cascade_step
 (the function a flight controller calls every control period; policy_step in the policy image), set-up code what only setup()
 reaches (airframe, pseudo-inverse, presets, resets), static initialisation what only the
 _GLOBAL__sub_I_* constructors reach (zeroing of the state objects). Data symbols are split into
@@ -17,7 +18,9 @@ import re
 import subprocess
 import sys
 
-TOOL = "arm-none-eabi-"
+import os
+
+TOOL = os.environ.get("KESTREL_BINUTILS_PREFIX", "arm-none-eabi-")
 
 
 def symbols(elf):
@@ -37,7 +40,8 @@ def call_graph(elf):
                          check=True).stdout
     graph, names, current = {}, {}, None
     head = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
-    call = re.compile(r"\t(?:bl|blx|b|b\.w|b\.n|b[a-z][a-z]\.w)\s+([0-9a-f]+) <([^>+]+)>")
+    call = re.compile(r"\t(?:bl|blx|b|b\.w|b\.n|b[a-z][a-z]\.w|jal|j)\s+(?:ra,)?([0-9a-f]+) <([^>+]+)>"
+                      r"|\tjalr\s.*# ([0-9a-f]+) <([^>+]+)>")
     for line in out.splitlines():
         m = head.match(line)
         if m:
@@ -47,7 +51,7 @@ def call_graph(elf):
             continue
         m = call.search(line)
         if m and current is not None:
-            target = int(m.group(1), 16)
+            target = int(m.group(1) or m.group(3), 16)
             if target != current:
                 graph[current].add(target)
     return graph, names

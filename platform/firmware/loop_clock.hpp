@@ -7,7 +7,7 @@
 
 #include <cstdint>
 
-#if defined(KESTREL_PLATFORM_MCU)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 #include <cstddef>
 
 #include "kestrel/platform/board.hpp"

@@ -1,6 +1,7 @@
 // Board API of the Cortex-M ports (Arm MPS2 AN385 / AN386 / AN500 and the STM32F405 of QEMU's
 // netduinoplus2) and of the 32-bit RISC-V port (QEMU virt, platform/riscv): core clock, SysTick
-// timing, console flush, stack use, exit. MCU builds only (KESTREL_PLATFORM_MCU).
+// timing, console flush, stack use, exit. MCU builds only
+// (KESTREL_PLATFORM_CORTEX_M or KESTREL_PLATFORM_RISCV).
 //
 // RISC-V has no SysTick: there the "SysTick" functions read the mcycle counter, which under
 // `-icount shift=0` advances once per instruction, with kCoreClockHz = 1 GHz (1 tick = 1
