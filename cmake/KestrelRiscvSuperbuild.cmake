@@ -44,7 +44,7 @@ endforeach()
 
 # The ctests of a RISC-V tree that the host ctest runs, and the targets they need.
 set(_kestrel_rv_tests
-  "^(kestrel_core_tests_mcu|kestrel_firmware|kestrel_firmware_policy|kestrel_firmware_policy.host_parity|kestrel_firmware_hexa|kestrel_capi_test|kestrel_platform_tests_mcu|mcu.probe_.*)$")
+  "^(kestrel_core_tests_mcu|kestrel_firmware|kestrel_firmware.host_parity|kestrel_firmware_policy|kestrel_firmware_policy.host_parity|kestrel_firmware_hexa|kestrel_capi_test|kestrel_platform_tests_mcu|mcu.probe_.*)$")
 set(_kestrel_rv_targets kestrel_core_tests_mcu kestrel_firmware kestrel_firmware_policy kestrel_firmware_hexa
   kestrel_capi_test kestrel_board_probe kestrel_platform_tests_mcu)
 
@@ -78,6 +78,7 @@ foreach(_variant rv32imac rv32imafc)
       "-DKESTREL_GOLDEN_DIR_DEFAULT=${KESTREL_GOLDEN_DIR_DEFAULT}"
       "-DKESTREL_QEMU_SYSTEM_RISCV32=${KESTREL_QEMU_SYSTEM_RISCV32}"
       "-DKESTREL_HOST_FIRMWARE_POLICY=$<TARGET_FILE:kestrel_firmware_policy_host>"
+      "-DKESTREL_HOST_FIRMWARE=$<TARGET_FILE:kestrel_firmware_host>"
     BUILD_COMMAND "${CMAKE_COMMAND}" --build "${_dir}" ${_build_targets}
     BUILD_ALWAYS ON  # the sub-build's own ninja decides what is out of date
     INSTALL_COMMAND ""
