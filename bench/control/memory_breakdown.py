@@ -33,6 +33,17 @@ def symbols(elf):
     return syms
 
 
+def ram_origin(elf):
+    """The RAM region's start (__ram_start of the board's linker script: 0x20000000 on the Cortex-M
+    boards, 0x80800000 on RISC-V virt, where "flash" is the DRAM below it)."""
+    out = subprocess.run([TOOL + "nm", elf], capture_output=True, text=True, check=True).stdout
+    for line in out.splitlines():
+        p = line.split()
+        if len(p) == 3 and p[2] == "__ram_start":
+            return int(p[0], 16)
+    return 0x20000000
+
+
 def call_graph(elf):
     """{function start address: set of called addresses} and {address: name}, from the
     disassembly (addresses, not names: constructor aliases C1/C2 share one address)."""
@@ -84,11 +95,12 @@ def main():
     setup = reach(graph, roots(r"setup")) - step
     init = reach(graph, roots(r"^_GLOBAL__sub_I_")) - step - setup
     rows, seen_addr = [], set()
+    ram = ram_origin(sys.argv[2])
     for name, (addr, size, kind) in sorted(image.items(), key=lambda kv: kv[1][0]):
         if name in empty or size == 0 or (addr, size) in seen_addr:
             continue  # aliases (C1/C2 constructors) once
         seen_addr.add((addr, size))
-        if addr >= 0x20000000:  # RAM origin of every Kestrel Cortex-M board (ld/*.ld)
+        if addr >= ram:
             role = "static RAM"
         elif kind in "TtWw":
             a = addr & ~1  # Thumb bit
