@@ -192,3 +192,44 @@ function(kestrel_add_mcu_test name)
   target_compile_definitions(${name} PRIVATE KESTREL_GOLDEN_DIR_DEFAULT="${KESTREL_GOLDEN_DIR_DEFAULT}")
   kestrel_add_qemu_test(${name} ${name} ${name} ${arg_TIMEOUT} --ktest)
 endfunction()
+
+# ctests mcu.heap_canary_{malloc,new}_link_fails (both ports): the no-heap link check must reject an
+# image that allocates. Each canary (platform/cortex-m/tests/heap_canary.cpp) is built on demand by
+# its ctest (never by the normal build), which passes only if the link fails on the heap symbol.
+function(kestrel_add_heap_canary_tests)
+  foreach(kind malloc new)
+    string(TOUPPER "${kind}" kind_upper)
+    kestrel_add_mcu_executable(kestrel_heap_canary_${kind} EXCLUDE_FROM_ALL SOURCES "${KESTREL_CORTEX_M_DIR}/tests/heap_canary.cpp")
+    target_compile_definitions(kestrel_heap_canary_${kind} PRIVATE KESTREL_CANARY_${kind_upper}=1)
+  endforeach()
+  set(canary_expect_malloc __wrap_malloc)
+  set(canary_expect_new __wrap__Znwj)  # operator new(unsigned int): size_t is 32 bits on both
+  foreach(kind malloc new)
+    add_test(NAME mcu.heap_canary_${kind}_link_fails
+      COMMAND ${CMAKE_COMMAND} -DBUILD_DIR=${CMAKE_BINARY_DIR} -DTARGET=kestrel_heap_canary_${kind}
+              -DEXPECT=${canary_expect_${kind}} -P "${KESTREL_CORTEX_M_DIR}/expect-link-failure.cmake")
+    # Both run a build in the same tree: never at the same time.
+    set_tests_properties(mcu.heap_canary_${kind}_link_fails PROPERTIES
+      LABELS "mcu;${KESTREL_BOARD};heap" RESOURCE_LOCK kestrel_build_tree TIMEOUT 300)
+  endforeach()
+endfunction()
+
+# kestrel_add_board_tests(<mode|exit status|output regex>...): the board tests of both ports
+# (platform/cortex-m/tests/test_board.cpp: the tick counter against a known instruction count,
+# timer callbacks, semihosting reads, console, stack measurement), the failure-path probe image
+# (board_probe.cpp) with one ctest mcu.probe_<mode> per argument, which must end QEMU with that
+# status and print a line matching the regex, and the heap canaries.
+function(kestrel_add_board_tests)
+  set(dir "${KESTREL_CORTEX_M_DIR}/tests")
+  kestrel_add_mcu_test(kestrel_platform_tests_mcu SOURCES "${dir}/test_board.cpp")
+  target_compile_definitions(kestrel_platform_tests_mcu PRIVATE KESTREL_BOARD_TEST_SOURCE="${dir}/test_board.cpp")
+  kestrel_add_mcu_executable(kestrel_board_probe SOURCES "${dir}/board_probe.cpp" LIBS kestrel_kernel STACK_SIZE 8192)
+  foreach(probe IN LISTS ARGN)
+    string(REPLACE "|" ";" probe "${probe}")
+    list(GET probe 0 mode)
+    list(GET probe 1 status)
+    list(GET probe 2 regex)
+    kestrel_add_qemu_test(mcu.probe_${mode} kestrel_board_probe ${mode} 60 --expect-status ${status} --expect-output "${regex}")
+  endforeach()
+  kestrel_add_heap_canary_tests()
+endfunction()

@@ -3,12 +3,14 @@
 #   ${CMAKE_BINARY_DIR}/mcu-rv32imac    rv32imac/ilp32, soft float
 #   ${CMAKE_BINARY_DIR}/mcu-rv32imafc   rv32imafc/ilp32f, single-precision FPU
 # and register the host ctests mcu.rv32imac and mcu.rv32imafc, which run a subset of that tree's
-# ctests under qemu-system-riscv32: the core tests image, the firmware examples (with the policy
-# example's trajectory compared to the host build's, bit for bit), the C API test, the board
-# tests and the failure-path probes. Only the images those tests need are built (not the benchmark images: run
-# bench/control/run-mcu-bench.sh on the tree for them), which keeps the added build time to the
-# core libraries and one test image per variant. The Cortex-M4F tree (KestrelMcuSuperbuild.cmake)
-# stays the one that runs everything.
+# ctests under qemu-system-riscv32: the core tests image, the firmware examples (the policy
+# example's trajectory hash and the Lee example's flight report compared with the host build's),
+# the C API test, the board tests, the failure-path probes, the heap canaries (an image that
+# allocates must fail to link), and the image checks of those images
+# (no heap or undefined symbols; flash and RAM use). Only the images those tests need are built
+# (not the benchmark images: bench/control/run-mcu-bench.sh builds them in the tree), which keeps
+# the added build time to the core libraries and one test image per variant. The Cortex-M4F tree
+# (KestrelMcuSuperbuild.cmake) stays the one that runs everything.
 #
 # Without the toolchain, picolibc, the borrowed libstdc++ headers or QEMU this prints which Debian
 # packages are missing and registers the two tests as disabled instead of failing the host build.
@@ -44,7 +46,7 @@ endforeach()
 
 # The ctests of a RISC-V tree that the host ctest runs, and the targets they need.
 set(_kestrel_rv_tests
-  "^(kestrel_core_tests_mcu|kestrel_firmware|kestrel_firmware.host_parity|kestrel_firmware_policy|kestrel_firmware_policy.host_parity|kestrel_firmware_hexa|kestrel_capi_test|kestrel_platform_tests_mcu|mcu.probe_.*)$")
+  "^((kestrel_core_tests_mcu|kestrel_firmware|kestrel_firmware_policy|kestrel_firmware_hexa|kestrel_capi_test|kestrel_platform_tests_mcu|kestrel_board_probe)(\\.image)?|kestrel_firmware(_policy)?\\.host_parity|mcu\\.probe_.*|mcu\\.heap_canary_.*)$")
 set(_kestrel_rv_targets kestrel_core_tests_mcu kestrel_firmware kestrel_firmware_policy kestrel_firmware_hexa
   kestrel_capi_test kestrel_board_probe kestrel_platform_tests_mcu)
 
