@@ -58,6 +58,8 @@ ExternalProject_Add(kestrel_mcu_cortex_m4f
     # The host build of the policy firmware example: the MCU tree's ctest
     # kestrel_firmware_policy.host_parity compares its trajectory hashes with the QEMU run's.
     "-DKESTREL_HOST_FIRMWARE_POLICY=$<TARGET_FILE:kestrel_firmware_policy_host>"
+    # kestrel_firmware.host_parity: the Lee example's flight report, the same on host and MCU.
+    "-DKESTREL_HOST_FIRMWARE=$<TARGET_FILE:kestrel_firmware_host>"
   BUILD_ALWAYS ON  # the sub-build's own ninja decides what is out of date
   INSTALL_COMMAND ""
   TEST_COMMAND "")

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Builds and runs every test: the host tests (GoogleTest), the same core tests and the firmware
-# example on the emulated Cortex-M4F under QEMU (run from the host ctest), and the host tests
+# examples on the emulated Cortex-M4F and on 32-bit RISC-V (rv32imac, rv32imafc; QEMU virt) under
+# QEMU (run from the host ctest: mcu.cortex-m4f, mcu.rv32imac, mcu.rv32imafc), and the host tests
 # again under AddressSanitizer + UBSan, then the Python package (python/: built into .venv/ with
 # pip, build tree cached in build/python/) and its tests (pytest python/tests), the fuzz targets'
 # regression runs (clang + libFuzzer, tests/fuzz/) and the multi-threaded step under
@@ -13,7 +14,7 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
 
 stage() { echo "== $1 (at $(( $(date +%s) - start )) s)"; }
-stage "host + Cortex-M4F (QEMU)"
+stage "host + Cortex-M4F + RISC-V rv32imac/rv32imafc (QEMU)"
 cmake --preset host
 cmake --build --preset host -j "$jobs"
 ctest --preset host -j "$jobs"

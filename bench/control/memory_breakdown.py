@@ -4,8 +4,9 @@
 
     bench/control/memory_breakdown.py <empty.elf> <image.elf> [out.csv]
 
-Roles come from the linked image's own call graph (arm-none-eabi-objdump -d: `bl`/`b` targets,
-so inlining is already accounted for): per-step code is everything reachable from cascade_step
+Roles come from the linked image's own call graph (arm-none-eabi-objdump -d: `bl`/`b` targets;
+RISC-V, with KESTREL_BINUTILS_PREFIX=riscv64-unknown-elf-: `jal`/`j` targets and `jalr` with a
+resolved target; so inlining is already accounted for): per-step code is everything reachable from cascade_step
 (the function a flight controller calls every control period; policy_step in the policy image), set-up code what only setup()
 reaches (airframe, pseudo-inverse, presets, resets), static initialisation what only the
 _GLOBAL__sub_I_* constructors reach (zeroing of the state objects). Data symbols are split into
@@ -17,7 +18,9 @@ import re
 import subprocess
 import sys
 
-TOOL = "arm-none-eabi-"
+import os
+
+TOOL = os.environ.get("KESTREL_BINUTILS_PREFIX", "arm-none-eabi-")
 
 
 def symbols(elf):
@@ -30,6 +33,17 @@ def symbols(elf):
     return syms
 
 
+def ram_origin(elf):
+    """The RAM region's start (__ram_start of the board's linker script: 0x20000000 on the Cortex-M
+    boards, 0x80800000 on RISC-V virt, where "flash" is the DRAM below it)."""
+    out = subprocess.run([TOOL + "nm", elf], capture_output=True, text=True, check=True).stdout
+    for line in out.splitlines():
+        p = line.split()
+        if len(p) == 3 and p[2] == "__ram_start":
+            return int(p[0], 16)
+    return 0x20000000
+
+
 def call_graph(elf):
     """{function start address: set of called addresses} and {address: name}, from the
     disassembly (addresses, not names: constructor aliases C1/C2 share one address)."""
@@ -37,7 +51,8 @@ def call_graph(elf):
                          check=True).stdout
     graph, names, current = {}, {}, None
     head = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
-    call = re.compile(r"\t(?:bl|blx|b|b\.w|b\.n|b[a-z][a-z]\.w)\s+([0-9a-f]+) <([^>+]+)>")
+    call = re.compile(r"\t(?:bl|blx|b|b\.w|b\.n|b[a-z][a-z]\.w|jal|j)\s+(?:ra,)?([0-9a-f]+) <([^>+]+)>"
+                      r"|\tjalr\s.*# ([0-9a-f]+) <([^>+]+)>")
     for line in out.splitlines():
         m = head.match(line)
         if m:
@@ -47,7 +62,7 @@ def call_graph(elf):
             continue
         m = call.search(line)
         if m and current is not None:
-            target = int(m.group(1), 16)
+            target = int(m.group(1) or m.group(3), 16)
             if target != current:
                 graph[current].add(target)
     return graph, names
@@ -80,11 +95,12 @@ def main():
     setup = reach(graph, roots(r"setup")) - step
     init = reach(graph, roots(r"^_GLOBAL__sub_I_")) - step - setup
     rows, seen_addr = [], set()
+    ram = ram_origin(sys.argv[2])
     for name, (addr, size, kind) in sorted(image.items(), key=lambda kv: kv[1][0]):
         if name in empty or size == 0 or (addr, size) in seen_addr:
             continue  # aliases (C1/C2 constructors) once
         seen_addr.add((addr, size))
-        if addr >= 0x20000000:  # RAM origin of every Kestrel Cortex-M board (ld/*.ld)
+        if addr >= ram:
             role = "static RAM"
         elif kind in "TtWw":
             a = addr & ~1  # Thumb bit

@@ -1,5 +1,6 @@
 #!/bin/sh
-# Runs the deterministic control benchmark of one Cortex-M build tree under QEMU and writes
+# Runs the deterministic control benchmark of one MCU build tree (Cortex-M or RISC-V) under QEMU
+# and writes
 #   bench/results/<target>/control.csv  instructions per call + painted stack bytes per function
 #   bench/results/<target>/memory.csv   flash / static RAM of the control stack (minimal images)
 #   bench/results/<target>/memory_breakdown.csv  the quad control stack's bytes by role and symbol
@@ -12,8 +13,10 @@
 #   bench/control/run-mcu-bench.sh <mcu build dir> <target name, e.g. cortex-m4f>
 #   (KESTREL_BENCH_JOBS: parallel build and compile jobs, default 2)
 #
-# The build dir is a configured Cortex-M tree (e.g. build/host/mcu-cortex-m4f, which the host
-# preset builds, or cmake --preset cortex-m4f); this script builds the bench images in it.
+# The build dir is a configured MCU tree (e.g. build/host/mcu-cortex-m4f, which the host preset
+# builds, cmake --preset cortex-m4f, or build/host/mcu-rv32imafc / cmake --preset rv32imafc);
+# this script builds the bench images in it. QEMU, its options and the binutils come from the
+# tree's cache (KESTREL_MCU_QEMU, KESTREL_MCU_QEMU_OPTIONS, KESTREL_MCU_SIZE).
 # Determinism check: the image is run twice and the two outputs must be byte-identical (under
 # -icount shift=0,sleep=off QEMU is a deterministic machine); the image itself also fails if a
 # measurement repeated in the same run differs by more than one SysTick tick.
@@ -29,8 +32,15 @@ jobs=${KESTREL_BENCH_JOBS:-2}
 export KESTREL_BENCH_JOBS="$jobs"  # stack_usage.py's compile jobs
 cmake --build "$build" -j "$jobs" --target kestrel_control_bench kestrel_stack_empty kestrel_stack_cascade \
   kestrel_stack_cascade_quad kestrel_stack_cascade_quad_baked kestrel_stack_capi kestrel_stack_policy
-machine=$(sed -n 's/^KESTREL_BOARD:[A-Z]*=//p' "$build/CMakeCache.txt")
-qemu=${QEMU:-qemu-system-arm}
+cache() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
+machine=$(cache KESTREL_BOARD)
+qemu=${QEMU:-$(cache KESTREL_MCU_QEMU)}
+qemu=${qemu:-qemu-system-arm}
+qemu_opts=$(cache KESTREL_MCU_QEMU_OPTIONS | tr ';' ' ')
+size=${ARM_SIZE:-$(cache KESTREL_MCU_SIZE)}
+size=${size:-arm-none-eabi-size}
+# nm/objdump for memory_breakdown.py: the size program's prefix (arm-none-eabi-, riscv64-unknown-elf-).
+export KESTREL_BINUTILS_PREFIX="${size%size}"
 # The images' folder: bench/control/mcu in a Cortex-M tree (older trees: bench/control-mcu).
 imgdir="$build/bench/control/mcu"
 [ -d "$imgdir" ] || imgdir="$build/bench/control-mcu"
@@ -38,7 +48,7 @@ elf="$imgdir/kestrel_control_bench.elf"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for run in 1 2; do
-  sh "$root/platform/cortex-m/run-qemu.sh" --qemu "$qemu" --machine "$machine" --elf "$elf" \
+  sh "$root/platform/cortex-m/run-qemu.sh" --qemu "$qemu" --machine "$machine" $qemu_opts --elf "$elf" \
      --name kestrel_control_bench --timeout 300 \
      --expect-output "determinism: every measurement repeated within one tick" > "$tmp/run$run.txt" 2>&1 || {
     cat "$tmp/run$run.txt"; echo "run-mcu-bench: the bench image failed" >&2; exit 1; }
@@ -53,7 +63,6 @@ fi
 echo "run-mcu-bench: deterministic: two runs identical"
 sed -n '/^csv-begin$/,/^csv-end$/p' "$tmp/out1.txt" | sed '1d;$d' > "$out/control.csv"
 
-size=${ARM_SIZE:-arm-none-eabi-size}
 # Flash = text + data, static RAM = data + bss without the linker-reserved main stack and its
 # guard (.stack is NOLOAD, counted in bss by size -B; take it from the section table instead).
 mem() {
@@ -88,7 +97,12 @@ python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.e
 python3 "$root/bench/control/memory_breakdown.py" "$imgdir/kestrel_stack_empty.elf" \
   "$imgdir/kestrel_stack_policy.elf" "$out/memory_breakdown_policy.csv" > /dev/null
 # Static worst-case stack (GCC's frame sizes over the call graph); control.csv's stack_bytes column
-# is the painted-stack measurement of one call.
-python3 "$root/bench/control/stack_usage.py" "$build" "$out/stack.csv"
+# is the painted-stack measurement of one call. KESTREL_BENCH_NO_STACK_BOUND=1 skips it (it compiles
+# every core source again) and keeps an existing stack.csv.
+if [ -z "${KESTREL_BENCH_NO_STACK_BOUND:-}" ]; then
+  python3 "$root/bench/control/stack_usage.py" "$build" "$out/stack.csv"
+fi
 echo "run-mcu-bench: wrote $out/control.csv, $out/memory.csv, $out/memory_breakdown{,_baked,_policy}.csv and $out/stack.csv"
-cat "$out/control.csv" "$out/memory.csv" "$out/stack.csv"
+cat "$out/control.csv" "$out/memory.csv"
+[ -f "$out/stack.csv" ] && cat "$out/stack.csv"
+exit 0

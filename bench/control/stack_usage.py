@@ -36,7 +36,7 @@ import tempfile
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The core, the C API, and the board runtime (assertion and fault paths end in its console).
 CORE_DIRS = ("kernel/", "controllers/", "allocation/", "robots/", "sensors/", "platform/capi/", "platform/cortex-m/src/",
-             "platform/common/")
+             "platform/riscv/src/", "platform/mcu/src/", "platform/common/")
 
 # Entry points: (name in the report, demangled-name prefix of the function, control.csv rows whose
 # painted stack measures the same call (their maximum is reported beside the bound)).

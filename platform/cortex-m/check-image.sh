@@ -37,5 +37,5 @@ set -- $("$size" -A "$elf" | awk '$1 == ".data" { d = $2 } $1 == ".bss" { b = $2
                                END { print d + 0, b + 0, s + 0 }')
 ram_data=$1 ram_bss=$2 stack=$3
 echo "flash: $((text + data)) bytes (text $text + data $data)"
-echo "RAM:   $((ram_data + ram_bss)) bytes (.data $ram_data + .bss $ram_bss), plus $stack bytes main stack incl. its 1 KiB MPU guard"
+echo "RAM:   $((ram_data + ram_bss)) bytes (.data $ram_data + .bss $ram_bss), plus $stack bytes main stack (on Cortex-M incl. its 1 KiB MPU guard)"
 exit $status

@@ -1,12 +1,13 @@
 // Clocks and tick pacing shared by the firmware examples' mains.
 // Host: the steady clock in nanoseconds (costs are reported, never asserted: the host is shared).
 // Cortex-M: SysTick interrupts pace the loop (the core sleeps in WFI between ticks) and SysTick
-// ticks time it; under QEMU -icount shift=0 one tick is exactly 40 instructions.
+// ticks time it; under QEMU -icount shift=0 one tick is exactly 40 instructions. RISC-V: the
+// CLINT timer paces it and mcycle times it (one tick = one instruction; board.hpp).
 #pragma once
 
 #include <cstdint>
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 #include <cstddef>
 
 #include "kestrel/platform/board.hpp"

@@ -10,7 +10,7 @@
 #include "kestrel/allocation/sequential_desaturation.hpp"
 #include "ktest.hpp"
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 #include "kestrel/platform/board.hpp"
 #include "kestrel/platform/console.hpp"
 #endif
@@ -26,7 +26,7 @@ AllocatorState g_alloc_state;
 AllocationResult g_out;
 PinvMatrix g_pinv;
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 namespace board = kestrel::platform::board;
 
 /// Fewest instructions over `reps` runs of f (the first run warms nothing on an M4 without
@@ -96,7 +96,7 @@ KTEST(AllocCost, QuadrotorPinvDesaturationAndMotorsWithinM4Budget) {
   KEXPECT_EQ(static_cast<int>(s5), static_cast<int>(Status::ok));
   KEXPECT_EQ(static_cast<int>(s6), static_cast<int>(Status::ok));
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
   board::systick_start();
   const std::uint64_t n_pinv = min_instructions(pinv);
   const std::uint64_t n_desat = min_instructions(desat);

@@ -7,7 +7,7 @@
 #include "kestrel/sensors/ray_sensor.hpp"
 #include "ktest.hpp"
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 #include "kestrel/platform/board.hpp"
 #include "kestrel/platform/console.hpp"
 #endif
@@ -95,7 +95,7 @@ KTEST(SensorTof, Vl53l5cxScanOfSmallScene) {
   KEXPECT_GT(counts[2], 0);
   KEXPECT_GT(counts[3], 0);
 
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
   namespace board = kestrel::platform::board;
   board::systick_start();
   auto scan = [&] { (void)render(s, pose, t, p.range, false, out); };

@@ -11,7 +11,7 @@
 
 #include "kestrel/platform/console.hpp"
 #include "ktest.hpp"
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
 #include "kestrel/platform/board.hpp"
 #endif
 
@@ -151,7 +151,7 @@ int main() {
     con::print(".");
     con::println(t.name);
   }
-#if defined(KESTREL_PLATFORM_CORTEX_M)
+#if defined(KESTREL_PLATFORM_CORTEX_M) || defined(KESTREL_PLATFORM_RISCV)
   con::print("ktest: main stack used ");
   con::print_uint(kestrel::platform::board::stack_used_bytes());
   con::print(" of ");

@@ -4,12 +4,13 @@
 # and parameters generated on the host at build time; that image also checks the baked model
 # against the one it builds on board, bit for bit) under QEMU and passes only if every image exits
 # 0 and all print the same output hash.
-#   compare-parity.sh <run-qemu.sh> <qemu> <machine> <default image.elf> <quad image.elf> [<baked image.elf>...]
+#   compare-parity.sh <run-qemu.sh> <qemu> <machine>[:<run-qemu.sh options>] <default image.elf> <quad image.elf> [<baked image.elf>...]
 set -u
-runner=$1 qemu=$2 machine=$3
+runner=$1 qemu=$2 machine=${3%%:*} opts=
+case $3 in *:*) opts=$(printf '%s' "${3#*:}" | tr ';' ' ') ;; esac
 shift 3
 hash_of() {
-  out=$(sh "$runner" --qemu "$qemu" --machine "$machine" --elf "$1" --name cascade_parity --timeout 120 2>&1) || {
+  out=$(sh "$runner" --qemu "$qemu" --machine "$machine" $opts --elf "$1" --name cascade_parity --timeout 120 2>&1) || {
     printf '%s\n' "$out" >&2; echo "compare-parity: FAIL: $1 did not exit 0" >&2; return 1; }
   printf '%s\n' "$out" | grep '^baked model:' >&2
   line=$(printf '%s\n' "$out" | grep '^cascade parity:')

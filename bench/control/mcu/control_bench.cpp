@@ -5,7 +5,7 @@
 // Method: under `qemu -icount shift=0,sleep=off` every guest instruction is 1 ns of virtual time
 // and SysTick counts the core clock (kestrel/platform/board.hpp: 40 instructions per tick on the
 // 25 MHz MPS2 boards, 125 per 21 ticks on the 168 MHz netduinoplus2), so a tick count is an
-// instruction count with one tick's resolution. Each function runs `calls`
+// instruction count with one tick's resolution (RISC-V: mcycle, one tick per instruction). Each function runs `calls`
 // times in one timed region that starts on a SysTick edge (sync_to_tick), which removes the
 // phase of the 40-instruction tick from the measurement; an empty loop of the same length is
 // subtracted. Each measurement is taken twice, from the same restored state, and must agree to
@@ -144,7 +144,11 @@ constexpr std::uint32_t kPaintBytes = 4096;  // deeper than any call measured he
 template <typename F>
 __attribute__((noinline)) std::uint32_t stack_bytes(F& f) {
   std::uint32_t sp;
+#if defined(__riscv)
+  asm volatile("mv %0, sp" : "=r"(sp));
+#else
   asm volatile("mov %0, sp" : "=r"(sp));
+#endif
   // The 64 bytes just below sp are left alone: this function may still spill there.
   volatile std::uint32_t* lo = reinterpret_cast<volatile std::uint32_t*>(sp - kPaintBytes);
   volatile std::uint32_t* hi = reinterpret_cast<volatile std::uint32_t*>(sp - 64);

@@ -1,4 +1,5 @@
-// SysTick timing, stack high-water mark and exit for the MPS2 boards (kestrel/platform/board.hpp).
+// SysTick timing for the Cortex-M boards (kestrel/platform/board.hpp; stack use and exit:
+// platform/mcu/src/runtime_common.cpp).
 #include "kestrel/platform/board.hpp"
 
 #include "kestrel/platform/console.hpp"
@@ -6,8 +7,6 @@
 #include "runtime.h"
 
 extern "C" {
-extern std::uint32_t __stack_limit[];  // NOLINT: linker-script symbols
-extern std::uint32_t __stack_top[];
 void SysTick_Handler();
 }
 
@@ -28,7 +27,6 @@ constexpr std::uint32_t kCsrEnable = 1u << 0;
 constexpr std::uint32_t kCsrTickInt = 1u << 1;
 constexpr std::uint32_t kCsrClkSourceCore = 1u << 2;
 constexpr std::uint32_t kIcsrPendStSet = 1u << 26;
-constexpr std::uint32_t kStackPaint = 0x5AC3C35Au;  // as written by Reset_Handler (startup.S)
 
 volatile std::uint32_t g_wraps = 0;
 std::uint32_t g_period = 0;  // reload + 1
@@ -71,27 +69,6 @@ std::uint64_t systick_now() {
   // wraps = t / P and CVR = (t % P == 0) ? 0 : P - t % P, with P = R + 1.
   const std::uint64_t base = static_cast<std::uint64_t>(wraps) * g_period;
   return cvr == 0 ? base : base + (g_period - cvr);
-}
-
-std::size_t stack_size_bytes() {
-  return static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(__stack_top) -
-                                  reinterpret_cast<std::uintptr_t>(__stack_limit));
-}
-
-std::size_t stack_used_bytes() {
-  const std::uint32_t* p = __stack_limit;
-  while (p < __stack_top && *p == kStackPaint) ++p;
-  return static_cast<std::size_t>(reinterpret_cast<std::uintptr_t>(__stack_top) - reinterpret_cast<std::uintptr_t>(p));
-}
-
-void semihost_exit(int code) {
-  // The MPU guard catches most overflows; a frame that skipped over it shows here, as a paint word
-  // overwritten at the very bottom of the stack.
-  if (*__stack_limit != kStackPaint) {
-    print("\nkestrel: main stack reached its limit (overflow?)\n");
-    if (code == 0) code = KESTREL_EXIT_FAULT;
-  }
-  semihost::exit(code);
 }
 
 }  // namespace kestrel::platform::board

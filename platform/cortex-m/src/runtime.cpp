@@ -1,7 +1,7 @@
 // Cortex-M runtime for the Kestrel images: early hardware set-up (vector table, fault handlers,
-// MPU stack guard), fault and fatal-error reports over the semihosting console, exit, the
-// platform's default assertion handler, and libstdc++'s error paths (std::__throw_*) turned into
-// a report and a non-zero exit instead of the exception machinery, which would pull in the heap.
+// MPU stack guard) and the fault reports over the semihosting console. Exit, fatal errors, the
+// default assertion handler and libstdc++'s error paths are shared with the RISC-V port
+// (platform/mcu/src/runtime_common.cpp).
 #include <cstdint>
 
 #include "kestrel/platform/board.hpp"
@@ -46,18 +46,9 @@ constexpr std::uintptr_t kMpuRasr = 0xE000EDA0u;
 
 std::uintptr_t addr(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
 
-void print_hex(std::uint32_t v) {
-  char buf[10] = {'0', 'x'};
-  for (int i = 0; i < 8; ++i) {
-    const std::uint32_t nib = (v >> (28 - 4 * i)) & 0xFu;
-    buf[2 + i] = static_cast<char>(nib < 10 ? '0' + nib : 'a' + nib - 10);
-  }
-  kestrel::platform::console_write(buf, sizeof(buf));
-}
-
 void print_reg(const char* name, std::uint32_t v) {
   print(name);
-  print_hex(v);
+  kestrel::platform::print_hex32(v);
 }
 
 }  // namespace
@@ -80,20 +71,6 @@ extern "C" void kestrel_cortex_m_early_init(void) {
     reg32(kMpuCtrl) = (1u << 2) | 1u;  // PRIVDEFENA | ENABLE
     asm volatile("dsb\n isb" : : : "memory");
   }
-}
-
-extern "C" void kestrel_cortex_m_exit(int code) { kestrel::platform::board::semihost_exit(code); }
-
-extern "C" void kestrel_cortex_m_fatal(const char* what, const char* detail) {
-  println();
-  print("kestrel: fatal: ");
-  print(what);
-  if (detail != nullptr && detail[0] != '\0') {
-    print(": ");
-    print(detail);
-  }
-  println();
-  kestrel::platform::semihost::exit(KESTREL_EXIT_FATAL);
 }
 
 extern "C" void kestrel_fault_report(const std::uint32_t* frame, std::uint32_t exc_return, std::uint32_t kind) {
@@ -139,44 +116,3 @@ extern "C" void kestrel_unexpected_exception(std::uint32_t ipsr) {
   println(" without a handler");
   kestrel::platform::semihost::exit(KESTREL_EXIT_UNEXPECTED_IRQ);
 }
-
-// Default for KESTREL_ASSERT (kernel/src/assert.cpp) when no handler is installed.
-extern "C" void kestrel_platform_assert_default(const char* expr, const char* file, int line) {
-  println();
-  print("kestrel: assertion failed: ");
-  print(expr);
-  print(" (");
-  print(file);
-  print(":");
-  kestrel::platform::print_int(line);
-  println(")");
-  kestrel::platform::semihost::exit(KESTREL_EXIT_FATAL);
-}
-
-// libstdc++'s error paths. libstdc++-nano's own versions call abort(); these say which one.
-// All of functexcept.o's set is defined so that member is never pulled in beside them.
-namespace std {
-#define KESTREL_THROW_NOARG(fn) \
-  void fn() { kestrel_cortex_m_fatal("std::" #fn, nullptr); }
-#define KESTREL_THROW_MSG(fn) \
-  void fn(const char* msg) { kestrel_cortex_m_fatal("std::" #fn, msg); }
-KESTREL_THROW_NOARG(__throw_bad_exception)
-KESTREL_THROW_NOARG(__throw_bad_alloc)
-KESTREL_THROW_NOARG(__throw_bad_array_new_length)
-KESTREL_THROW_NOARG(__throw_bad_cast)
-KESTREL_THROW_NOARG(__throw_bad_typeid)
-KESTREL_THROW_NOARG(__throw_bad_function_call)
-KESTREL_THROW_MSG(__throw_logic_error)
-KESTREL_THROW_MSG(__throw_domain_error)
-KESTREL_THROW_MSG(__throw_invalid_argument)
-KESTREL_THROW_MSG(__throw_length_error)
-KESTREL_THROW_MSG(__throw_out_of_range)
-KESTREL_THROW_MSG(__throw_runtime_error)
-KESTREL_THROW_MSG(__throw_range_error)
-KESTREL_THROW_MSG(__throw_overflow_error)
-KESTREL_THROW_MSG(__throw_underflow_error)
-// The format arguments are not expanded (that would need vsnprintf); the format names the check.
-void __throw_out_of_range_fmt(const char* fmt, ...) { kestrel_cortex_m_fatal("std::__throw_out_of_range_fmt", fmt); }
-#undef KESTREL_THROW_NOARG
-#undef KESTREL_THROW_MSG
-}  // namespace std

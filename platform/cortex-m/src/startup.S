@@ -88,7 +88,7 @@ Reset_Handler:
 6:  bl    kestrel_cortex_m_early_init
     bl    __libc_init_array
     bl    main
-    bl    kestrel_cortex_m_exit      /* noreturn: semihosting SYS_EXIT with main's result */
+    bl    kestrel_mcu_exit      /* noreturn: semihosting SYS_EXIT with main's result */
 7:  b     7b
     .pool
     .size Reset_Handler, . - Reset_Handler

@@ -1,6 +1,12 @@
 // Board API of the Cortex-M ports (Arm MPS2 AN385 / AN386 / AN500 and the STM32F405 of QEMU's
-// netduinoplus2): core clock, SysTick timing, console flush, stack use, exit. MCU builds only
-// (KESTREL_PLATFORM_CORTEX_M).
+// netduinoplus2) and of the 32-bit RISC-V port (QEMU virt, platform/riscv): core clock, SysTick
+// timing, console flush, stack use, exit. MCU builds only
+// (KESTREL_PLATFORM_CORTEX_M or KESTREL_PLATFORM_RISCV).
+//
+// RISC-V has no SysTick: there the "SysTick" functions read the mcycle counter, which under
+// `-icount shift=0` advances once per instruction, with kCoreClockHz = 1 GHz (1 tick = 1
+// instruction = 1 ns); a callback given to systick_start is paced by the CLINT machine timer
+// (10 MHz, 100 instructions per mtime tick), exact when the period is a multiple of 100 ticks.
 //
 // Timing under QEMU: run with `-icount shift=0,sleep=off` (run-qemu.sh does) and every guest
 // instruction advances virtual time by exactly 1 ns (sleep=off: an idle core, WFI, jumps to the
@@ -27,6 +33,9 @@ inline constexpr const char* kCpuName = KESTREL_BOARD_CPU;
 #if defined(__ARM_FP)
 inline constexpr bool kHasFpu = (__ARM_FP & 0x4) != 0;
 inline constexpr bool kHasDoubleFpu = (__ARM_FP & 0x8) != 0;
+#elif defined(__riscv_flen)
+inline constexpr bool kHasFpu = true;  // F (rv32imafc); D if FLEN is 64
+inline constexpr bool kHasDoubleFpu = __riscv_flen >= 64;
 #else
 inline constexpr bool kHasFpu = false;
 inline constexpr bool kHasDoubleFpu = false;

@@ -6,6 +6,7 @@
 #include "kestrel/platform/board.hpp"
 #include "kestrel/platform/console.hpp"
 #include "kestrel/platform/semihosting.hpp"
+#include "mcu_arch.hpp"
 
 namespace kestrel::platform {
 namespace {
@@ -15,14 +16,8 @@ char g_buf[kBufferSize + 1];  // + 1 for the NUL SYS_WRITE0 needs
 std::size_t g_len = 0;
 int g_stdout = -2;  // -2: not opened yet; -1: ":tt" unavailable
 
-// Console output may come from thread mode and from interrupts (SysTick callback, faults):
-// PRIMASK keeps the buffer consistent.
-std::uint32_t irq_save() {
-  std::uint32_t primask;
-  asm volatile("mrs %0, primask\n cpsid i" : "=r"(primask) : : "memory");
-  return primask;
-}
-void irq_restore(std::uint32_t primask) { asm volatile("msr primask, %0" : : "r"(primask) : "memory"); }
+// Console output may come from the main program and from interrupts (timer callback, faults):
+// interrupts are masked while the buffer changes (arch::irq_save, mcu_arch.hpp of each port).
 
 void flush_locked() {
   if (g_len == 0) return;
@@ -39,7 +34,7 @@ void flush_locked() {
 }  // namespace
 
 void console_write(const char* s, std::size_t n) {
-  const std::uint32_t primask = irq_save();
+  const std::uint32_t primask = arch::irq_save();
   bool newline = false;
   while (n > 0) {
     if (g_len == kBufferSize) flush_locked();
@@ -52,14 +47,14 @@ void console_write(const char* s, std::size_t n) {
     n -= chunk;
   }
   if (newline) flush_locked();
-  irq_restore(primask);
+  arch::irq_restore(primask);
 }
 
 namespace board {
 void console_flush() {
-  const std::uint32_t primask = irq_save();
+  const std::uint32_t primask = arch::irq_save();
   flush_locked();
-  irq_restore(primask);
+  arch::irq_restore(primask);
 }
 }  // namespace board
 

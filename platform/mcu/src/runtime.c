@@ -27,9 +27,9 @@ int atexit(void (*fn)(void)) {
   return 0;
 }
 
-__attribute__((noreturn)) void _exit(int code) { kestrel_cortex_m_exit(code); }
-__attribute__((noreturn)) void exit(int code) { kestrel_cortex_m_exit(code); }
-__attribute__((noreturn)) void abort(void) { kestrel_cortex_m_fatal("abort()", 0); }
+__attribute__((noreturn)) void _exit(int code) { kestrel_mcu_exit(code); }
+__attribute__((noreturn)) void exit(int code) { kestrel_mcu_exit(code); }
+__attribute__((noreturn)) void abort(void) { kestrel_mcu_fatal("abort()", 0); }
 
 /* newlib's assert() (when NDEBUG is not defined) would fiprintf to stderr: stdio and malloc. */
 __attribute__((noreturn)) void __assert_func(const char* file, int line, const char* func, const char* expr) {
@@ -39,5 +39,5 @@ __attribute__((noreturn)) void __assert_func(const char* file, int line, const c
   }
 }
 
-__attribute__((noreturn)) void __cxa_pure_virtual(void) { kestrel_cortex_m_fatal("pure virtual function called", 0); }
-__attribute__((noreturn)) void __cxa_deleted_virtual(void) { kestrel_cortex_m_fatal("deleted virtual function called", 0); }
+__attribute__((noreturn)) void __cxa_pure_virtual(void) { kestrel_mcu_fatal("pure virtual function called", 0); }
+__attribute__((noreturn)) void __cxa_deleted_virtual(void) { kestrel_mcu_fatal("deleted virtual function called", 0); }

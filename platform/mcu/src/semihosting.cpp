@@ -1,4 +1,6 @@
-// ARM semihosting calls (see kestrel/platform/semihosting.hpp).
+// Semihosting operations (see kestrel/platform/semihosting.hpp), shared by the Cortex-M and RISC-V
+// ports: the parameter blocks are the same on AArch32 and RV32; only the trap sequence differs
+// (semihost::call, in each port's semihost_call.cpp).
 #include "kestrel/platform/semihosting.hpp"
 
 #include <cstring>
@@ -6,20 +8,6 @@
 #include "kestrel/platform/board.hpp"
 
 namespace kestrel::platform::semihost {
-
-std::int32_t call(std::uint32_t op, const void* arg) {
-  // The host reads and writes memory through arg (parameter blocks, buffers): "memory" clobber.
-  std::uint32_t result;
-  asm volatile(
-      "mov r0, %1\n"
-      "mov r1, %2\n"
-      "bkpt 0xAB\n"
-      "mov %0, r0"
-      : "=r"(result)
-      : "r"(op), "r"(arg)
-      : "r0", "r1", "memory");
-  return static_cast<std::int32_t>(result);
-}
 
 int open(const char* path, Mode mode) {
   const std::uint32_t block[3] = {reinterpret_cast<std::uintptr_t>(path), mode,
