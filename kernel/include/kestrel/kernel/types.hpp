@@ -42,9 +42,9 @@ using Quat = Eigen::Quaternion<real, Eigen::DontAlign>;
 /// A fixed-size matrix held as a plain array in Eigen's storage order (column-major), for the
 /// read-only parameter structs (LeeParams, AllocationModel). Why not a Mat there: Eigen 3.4's
 /// constructors are not constexpr, so an object holding an Eigen matrix can never be
-/// constant-initialised; GCC places even a `const` one in RAM and fills it at start-up. An
-/// aggregate of plain arrays is constant-initialised, so a `const LeeParams` baked at build time
-/// stays in flash (the 512-byte-RAM control stack, bench/control/mcu/baked_cascade.hpp).
+/// constant-initialised; GCC places even a `const` one in RAM and fills it at start-up. A plain
+/// array with constexpr constructors is, so a `constexpr LeeParams` baked at build time stays in
+/// flash (the 512-byte-RAM control stack, bench/control/mcu/baked_cascade.hpp).
 /// Element access and assignment from Eigen work as on a Mat; in expressions use map(), a view
 /// that costs nothing (the same loads an Eigen member would compile to).
 template <int Rows, int Cols = 1>
@@ -72,8 +72,6 @@ struct PlainMat {
     map() = m;
     return *this;
   }
-  constexpr real& operator()(int i) { return v[i]; }
-  constexpr const real& operator()(int i) const { return v[i]; }
   PlainMat& operator*=(real s) {
     for (real& x : v) x *= s;
     return *this;
@@ -81,6 +79,8 @@ struct PlainMat {
   /// Exact, element by element (as Eigen's == on matrices).
   friend bool operator==(const PlainMat& a, const PlainMat& b) { return a.map() == b.map(); }
   friend bool operator!=(const PlainMat& a, const PlainMat& b) { return !(a == b); }
+  constexpr real& operator()(int i) { return v[i]; }
+  constexpr const real& operator()(int i) const { return v[i]; }
   constexpr real& operator[](int i) { return v[i]; }
   constexpr const real& operator[](int i) const { return v[i]; }
   constexpr real& operator()(int row, int col) { return v[row + Rows * col]; }
