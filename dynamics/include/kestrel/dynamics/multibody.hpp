@@ -57,6 +57,15 @@ struct MultibodyModel {
   // -damping * qd). Zero for a free joint.
   real armature[kMaxBodies] = {};
   real damping[kMaxBodies] = {};
+  // Per joint, used by the constrained step (contact.hpp), not by rnea/crba/aba: position limits
+  // (rad or m; has_limit false: none), Coulomb friction (N m or N, the largest force the joint's
+  // dry friction resists motion with: MuJoCo's frictionloss) and the effort limit (N m or N;
+  // 0: none) that the joint drive clamps its command to.
+  bool has_limit[kMaxBodies] = {};
+  real q_min[kMaxBodies] = {};
+  real q_max[kMaxBodies] = {};
+  real friction_loss[kMaxBodies] = {};
+  real effort_limit[kMaxBodies] = {};
   Vec3 gravity_w = Vec3(0, 0, -9.81_r);
 };
 
@@ -89,7 +98,8 @@ template <int N>
     if (m.joint[i] != JointType::revolute && m.joint[i] != JointType::prismatic && m.joint[i] != JointType::fixed &&
         m.joint[i] != JointType::free)
       return Status::invalid_argument;
-    if (m.joint[i] == JointType::free && (i != 0 || m.parent[i] != -1 || m.armature[i] != 0 || m.damping[i] != 0))
+    if (m.joint[i] == JointType::free && (i != 0 || m.parent[i] != -1 || m.armature[i] != 0 || m.damping[i] != 0 ||
+                                         m.has_limit[i] || m.friction_loss[i] != 0 || m.effort_limit[i] != 0))
       return Status::invalid_argument;
     const SpatialInertia& b = m.body[i];
     if (!(b.mass > 0) || !is_finite(b.mass) || !all_finite(b.com) || !all_finite(b.inertia_com) ||
@@ -111,6 +121,11 @@ template <int N>
     }
     if (!all_finite(m.axis[i]) || std::fabs(m.axis[i].norm() - 1) > real(1e-4)) return Status::invalid_argument;
     if (!(m.armature[i] >= 0) || !is_finite(m.armature[i]) || !(m.damping[i] >= 0) || !is_finite(m.damping[i]))
+      return Status::invalid_argument;
+    if (!(m.friction_loss[i] >= 0) || !is_finite(m.friction_loss[i]) || !(m.effort_limit[i] >= 0) ||
+        !is_finite(m.effort_limit[i]))
+      return Status::invalid_argument;
+    if (m.has_limit[i] && (!is_finite(m.q_min[i]) || !is_finite(m.q_max[i]) || !(m.q_min[i] <= m.q_max[i])))
       return Status::invalid_argument;
     m.dof_index[i] = dof++;
     m.q_index[i] = nq++;
