@@ -406,29 +406,11 @@ void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const
   }
 }
 
-/// One step of length dt_s of semi-implicit (symplectic) Euler with implicit joint damping, the
-/// scheme MuJoCo's default Euler integrator uses (E. Todorov, T. Erez, Y. Tassa, "MuJoCo: A physics
-/// engine for model-based control", IROS 2012; mj_Euler): the accelerations with the damping taken
-/// at the end of the step (aba's implicit_damping_dt), the velocities first, qd += dt qdd, then the
-/// positions with the new velocities. A revolute or prismatic joint: q += dt qd. The free joint
-/// (MuJoCo's mj_integratePos): the base origin moves by dt R v_b (R its orientation) and the
-/// orientation turns by the body-frame rotation vector dt w_b (an exact exponential), then is
-/// renormalised. Why: explicit Euler gains energy and needs dt < 2 I / D on a damped joint; this
-/// keeps a conservative system's energy bounded and any damping stable at legged_gym's dt = 0.005 s
-/// (tests/dynamics/test_multibody.cpp). qdd (num_dofs, may be null) receives the accelerations.
-/// Status as aba; on any refusal q and qd are left as they were.
+namespace detail {
+/// The positions' half of a semi-implicit Euler step: q advances by dt_s with the velocities v (see
+/// step_semi_implicit; shared with contact.hpp's step_constrained).
 template <int N>
-[[nodiscard]] Status step_semi_implicit(const MultibodyModel<N>& m, MultibodyData<N>& d, real* q, real* qd,
-                                        const real* tau, real dt_s, real* qdd = nullptr,
-                                        const Vec6* f_ext = nullptr) {
-  if (!(dt_s > 0) || !is_finite(dt_s)) return Status::invalid_argument;
-  real acc[max_dofs<N>()];
-  const Status st = aba(m, d, q, qd, tau, acc, f_ext, dt_s);
-  if (st != Status::ok) return st;
-  const int n = m.num_dofs;
-  real v_new[max_dofs<N>()];
-  for (int k = 0; k < n; ++k) v_new[k] = qd[k] + dt_s * acc[k];
-  if (!all_finite(v_new, n)) return Status::non_finite_input;
+void integrate_positions(const MultibodyModel<N>& m, real* q, const real* v_new, real dt_s) {
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], j = m.q_index[i];
     if (k < 0) continue;
@@ -453,6 +435,33 @@ template <int N>
     for (int a = 0; a < 3; ++a) q[j + a] += dp[a];
     for (int a = 0; a < 4; ++a) q[j + 3 + a] = qn[a] / len;
   }
+}
+}  // namespace detail
+
+/// One step of length dt_s of semi-implicit (symplectic) Euler with implicit joint damping, the
+/// scheme MuJoCo's default Euler integrator uses (E. Todorov, T. Erez, Y. Tassa, "MuJoCo: A physics
+/// engine for model-based control", IROS 2012; mj_Euler): the accelerations with the damping taken
+/// at the end of the step (aba's implicit_damping_dt), the velocities first, qd += dt qdd, then the
+/// positions with the new velocities. A revolute or prismatic joint: q += dt qd. The free joint
+/// (MuJoCo's mj_integratePos): the base origin moves by dt R v_b (R its orientation) and the
+/// orientation turns by the body-frame rotation vector dt w_b (an exact exponential), then is
+/// renormalised. Why: explicit Euler gains energy and needs dt < 2 I / D on a damped joint; this
+/// keeps a conservative system's energy bounded and any damping stable at legged_gym's dt = 0.005 s
+/// (tests/dynamics/test_multibody.cpp). qdd (num_dofs, may be null) receives the accelerations.
+/// Status as aba; on any refusal q and qd are left as they were.
+template <int N>
+[[nodiscard]] Status step_semi_implicit(const MultibodyModel<N>& m, MultibodyData<N>& d, real* q, real* qd,
+                                        const real* tau, real dt_s, real* qdd = nullptr,
+                                        const Vec6* f_ext = nullptr) {
+  if (!(dt_s > 0) || !is_finite(dt_s)) return Status::invalid_argument;
+  real acc[max_dofs<N>()];
+  const Status st = aba(m, d, q, qd, tau, acc, f_ext, dt_s);
+  if (st != Status::ok) return st;
+  const int n = m.num_dofs;
+  real v_new[max_dofs<N>()] = {};
+  for (int k = 0; k < n; ++k) v_new[k] = qd[k] + dt_s * acc[k];
+  if (!all_finite(v_new, n)) return Status::non_finite_input;
+  detail::integrate_positions(m, q, v_new, dt_s);
   for (int k = 0; k < n; ++k) qd[k] = v_new[k];
   if (qdd != nullptr)
     for (int k = 0; k < n; ++k) qdd[k] = acc[k];

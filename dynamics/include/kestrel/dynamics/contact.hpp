@@ -1,0 +1,425 @@
+// Contacts with friction, joint limits and joint dry friction for the articulated-body dynamics of
+// multibody.hpp, as velocity-level constraints solved once per time step.
+//
+// The model (time-stepping with impulses, D. E. Stewart and J. C. Trinkle, "An implicit
+// time-stepping scheme for rigid body dynamics with inelastic collisions and Coulomb friction",
+// IJNME 39, 1996; M. Anitescu and F. A. Potra, Nonlinear Dynamics 14, 1997): a step of length h
+// first takes the unconstrained velocities v* = qd + h (H + h D)^-1 (tau - bias) (the semi-implicit
+// Euler step of step_semi_implicit, damping implicit), then finds constraint impulses lambda so
+// that v = v* + (H + h D)^-1 J^T lambda satisfies, row by row:
+//   contact normal      J_n v >= target, lambda_n >= 0, complementary (no pull, no penetration);
+//   contact friction    the tangential impulse within Coulomb's cone |lambda_t| <= mu lambda_n
+//                       and opposing the sliding velocity when on its edge (isotropic cone, not
+//                       a pyramid: the friction does not depend on the direction of sliding);
+//   joint limit         the joint moves no further than its limit (one-sided, as a contact);
+//   joint dry friction  |lambda| <= F h with the joint at rest inside (MuJoCo's frictionloss).
+// The positions then move with v (semi-implicit Euler), so a resting contact stays at rest.
+//
+// Solver: projected Gauss-Seidel over the Delassus matrix W = J (H + h D)^-1 J^T, a row at a time,
+// each contact's two friction rows projected together onto the cone (K. Erleben, "Velocity-based
+// shock propagation for multibody dynamics animation", ACM TOG 26(2), 2007; E. Catto's sequential
+// impulses, GDC 2006). A fixed iteration cap and a fixed row order make the result a function of
+// the inputs alone (the determinism contract). Each row's diagonal is increased by
+// `regularization` times itself (constraint force mixing, as ODE's CFM), which keeps W's
+// redundant rows (four corners of a box on a plane) from stalling the iteration.
+//
+// Targets (the right-hand side), after Box2D's speculative contacts and position correction:
+// a gap s > 0 may close by at most s this step (target -s / h: a fast body meets the ground at the
+// step it arrives, with no tunnelling and no early stop); a penetration -s beyond `slop_m` is
+// removed at `baumgarte` of it per step (target baumgarte (-s - slop) / h; J. Baumgarte, CMAME 1,
+// 1972). Restitution: a contact closing faster than `restitution_threshold_mps` that would close
+// this step leaves at e times its approach speed (Newton's law of impact).
+//
+// Core rules: no heap (fixed-capacity arrays in the caller's scratch ConstraintData), no
+// exceptions, float or double. Units: metres, seconds, newtons, radians.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "kestrel/dynamics/multibody.hpp"
+
+namespace kestrel::dynamics {
+
+/// A contact between a body and the environment: the point on the body (world coordinates), the
+/// unit normal pointing from the environment into the body (the direction the body is pushed),
+/// the signed gap (m; negative: penetration), and the combined friction coefficient and
+/// restitution of the pair.
+struct ContactPoint {
+  int body = -1;
+  Vec3 point_w = Vec3::Zero();
+  Vec3 normal_w = Vec3(0, 0, 1);
+  real separation_m = 0;
+  real friction = 1;
+  real restitution = 0;
+};
+
+/// Solver settings (see the file comment). Units in the names; the others are fractions.
+struct ConstraintParams {
+  int iterations = 60;                      // PGS sweeps at most
+  real tolerance_mps = real(1e-6);          // stop once no impulse changes by more than this x W_ii
+  real baumgarte = real(0.2);               // share of a penetration removed per step
+  real slop_m = real(5e-4);                 // penetration left alone (no jitter at rest)
+  real restitution_threshold_mps = real(0.5);  // slower impacts do not bounce
+  real limit_margin = real(0.02);           // rad or m: a joint this close to a limit gets its row
+  real regularization = real(1e-6);         // relative constraint force mixing on W's diagonal
+};
+
+enum class RowKind : std::uint8_t { normal = 0, tangent = 1, limit = 2, joint_friction = 3 };
+
+/// The solver's scratch and its results, of compile-time capacity: kMaxBodies as the model's,
+/// kMaxContacts contact points per step. Caller storage (static on an MCU, one per thread in a
+/// batch); nothing persists between steps except the results.
+template <int kMaxBodies, int kMaxContacts>
+struct ConstraintData {
+  static_assert(kMaxContacts >= 0, "contact capacity");
+  static constexpr int kDofs = max_dofs<kMaxBodies>();
+  static constexpr int kRows = 3 * kMaxContacts + 3 * kMaxBodies;  // 3 per contact, 3 per joint (two limits, friction)
+  real H[kDofs][kDofs];  // mass matrix + h D at the step's start, then its L^T D L factors
+  int dof_parent[kDofs];  // the velocity coordinate each one hangs from (-1: none)
+  Transform X_world[kMaxBodies];
+  real J[kRows][kDofs];  // constraint rows
+  real Y[kRows][kDofs];  // (H + h D)^-1 J_i^T
+  real W[kRows][kRows];  // Delassus matrix
+  real b[kRows], target[kRows], lambda[kRows], lo[kRows], hi[kRows];
+  RowKind kind[kRows];
+  std::int16_t owner[kRows];  // the contact (normal, tangent rows) or the velocity coordinate (joint rows)
+  int num_rows = 0;
+
+  // Results of the last step: the force (N) each contact applied to its body, world coordinates,
+  // at its point (impulse / h); the limit and dry-friction forces per velocity coordinate (N m or
+  // N); the sweeps the solver used.
+  Vec3 contact_force_w[kMaxContacts > 0 ? kMaxContacts : 1];
+  real joint_constraint_force[kDofs] = {};
+  int iterations_used = 0;
+};
+
+namespace detail {
+
+/// Two unit tangents completing the unit normal n to a right-handed basis (t1, t2, n), chosen by a
+/// fixed rule so that the same normal always gives the same tangents.
+inline void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const Vec3 helper = std::fabs(n[2]) < real(0.9) ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
+  t1 = helper.cross(n);
+  t1 /= t1.norm();
+  t2 = n.cross(t1);
+}
+
+/// For each velocity coordinate, the one it hangs from in the tree (-1: none): the previous one
+/// within a joint (the free joint's six), else the last one of the nearest ancestor joint that has
+/// any. This is the sparsity pattern of the mass matrix (RBDA section 6.5).
+template <int N>
+void dof_parents(const MultibodyModel<N>& m, int* parent_dof) {
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k0 = m.dof_index[i];
+    if (k0 < 0) continue;
+    int up = -1;
+    for (int a = m.parent[i]; a >= 0 && up < 0; a = m.parent[a])
+      if (m.dof_index[a] >= 0) up = m.dof_index[a] + joint_dofs(m, a) - 1;
+    parent_dof[k0] = up;
+    for (int c = 1; c < joint_dofs(m, i); ++c) parent_dof[k0 + c] = k0 + c - 1;
+  }
+}
+
+/// H = L^T D L in place (lower triangle: L below the diagonal, D on it), visiting only the entries
+/// the tree's branches leave non-zero: Featherstone's LTDL factorisation (RBDA table 6.3), whose
+/// cost falls with the number of branches (a quadruped's four legs). Why not Eigen's LLT: its
+/// dynamic-size kernels may allocate a blocking workspace, which the core may not. False if a
+/// pivot is not positive (a singular or non-finite matrix).
+template <int kLd>
+bool ltdl_factor(real (*H)[kLd], const int* parent_dof, int n) {
+  for (int k = n - 1; k >= 0; --k) {
+    if (!(H[k][k] > 0) || !is_finite(H[k][k])) return false;
+    for (int i = parent_dof[k]; i >= 0; i = parent_dof[i]) {
+      const real a = H[k][i] / H[k][k];
+      for (int j = i; j >= 0; j = parent_dof[j]) H[i][j] -= H[k][j] * a;
+      H[k][i] = a;
+    }
+  }
+  return true;
+}
+
+/// x = (L^T D L)^-1 x in place, with the factors of ltdl_factor (RBDA table 6.4's solves).
+template <int kLd>
+void ltdl_solve(const real (*H)[kLd], const int* parent_dof, int n, real* x) {
+  for (int i = n - 1; i >= 0; --i)  // L^T z = b
+    for (int j = parent_dof[i]; j >= 0; j = parent_dof[j]) x[j] -= H[i][j] * x[i];
+  for (int i = 0; i < n; ++i) x[i] /= H[i][i];
+  for (int i = 0; i < n; ++i)  // L x = z
+    for (int j = parent_dof[i]; j >= 0; j = parent_dof[j]) x[i] -= H[i][j] * x[j];
+}
+
+template <int N>
+bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count) {
+  for (int i = 0; i < count; ++i) {
+    if (c[i].body < 0 || c[i].body >= m.num_bodies) return false;
+    if (!all_finite(c[i].point_w) || !all_finite(c[i].normal_w) || !is_finite(c[i].separation_m)) return false;
+    if (std::fabs(c[i].normal_w.norm() - 1) > real(1e-3)) return false;
+    if (!(c[i].friction >= 0) || !is_finite(c[i].friction)) return false;
+    if (!(c[i].restitution >= 0) || !(c[i].restitution <= 1)) return false;
+  }
+  return true;
+}
+
+}  // namespace detail
+
+/// One step of length dt_s with contacts, joint limits and joint dry friction (see the file
+/// comment): q, qd advance in place; `contacts` (num_contacts <= kMaxContacts; may be null when 0)
+/// were found at q (collide_halfspace below, or the caller's own geometry). cd receives the
+/// contact forces. Status::ok; invalid_argument for a bad dt, count or contact (body out of range,
+/// non-unit normal, negative friction, restitution outside [0, 1]); non_finite_input as aba's
+/// (non-finite input, a singular mass matrix, a result that would not be finite). On any refusal
+/// q and qd are left as they were.
+template <int N, int C>
+[[nodiscard]] Status step_constrained(const MultibodyModel<N>& m, MultibodyData<N>& d, ConstraintData<N, C>& cd, real* q,
+                                      real* qd, const real* tau, real dt_s, const ContactPoint* contacts, int num_contacts,
+                                      const ConstraintParams& p = ConstraintParams()) {
+  using CD = ConstraintData<N, C>;
+  constexpr int kDofs = CD::kDofs;
+  const int n = m.num_dofs;
+  if (!(dt_s > 0) || !is_finite(dt_s) || num_contacts < 0 || num_contacts > C || (num_contacts > 0 && contacts == nullptr))
+    return Status::invalid_argument;
+  if (!detail::valid_contacts(m, contacts, num_contacts)) return Status::invalid_argument;
+  if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
+  if (m.joint[0] == JointType::free) {
+    const real* qb = q + m.q_index[0] + 3;
+    if (std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) > real(1e-3))
+      return Status::non_finite_input;
+  }
+
+  // The unconstrained step: (H + h D) a = tau - bias, bias = rnea at zero acceleration (Coriolis,
+  // centrifugal, gravity and the damping force D qd).
+  crba(m, d, q, &cd.H[0][0], kDofs);
+  for (int i = 0; i < m.num_bodies; ++i)
+    if (m.dof_index[i] >= 0 && m.joint[i] != JointType::free) cd.H[m.dof_index[i]][m.dof_index[i]] += dt_s * m.damping[i];
+  real zero[kDofs] = {}, acc[kDofs];
+  rnea(m, d, q, qd, zero, acc);
+  detail::dof_parents(m, cd.dof_parent);
+  if (!detail::ltdl_factor(cd.H, cd.dof_parent, n)) return Status::non_finite_input;
+  for (int k = 0; k < n; ++k) acc[k] = tau[k] - acc[k];
+  detail::ltdl_solve(cd.H, cd.dof_parent, n, acc);
+  real v_free[kDofs];
+  for (int k = 0; k < n; ++k) v_free[k] = qd[k] + dt_s * acc[k];
+  if (!all_finite(v_free, n)) return Status::non_finite_input;
+
+  // The rows.
+  forward_kinematics(m, d, q, cd.X_world);
+  int rows = 0;
+  auto new_row = [&](RowKind kind, int owner) -> int {
+    const int r = rows++;
+    for (int k = 0; k < n; ++k) cd.J[r][k] = 0;
+    cd.kind[r] = kind;
+    cd.owner[r] = static_cast<std::int16_t>(owner);
+    cd.lambda[r] = 0;
+    cd.target[r] = 0;
+    cd.lo[r] = 0;
+    cd.hi[r] = std::numeric_limits<real>::infinity();
+    return r;
+  };
+  real Jp[6 * kDofs];
+  for (int c = 0; c < num_contacts; ++c) {
+    const ContactPoint& ct = contacts[c];
+    const Transform& Xb = cd.X_world[ct.body];
+    point_jacobian(m, d, cd.X_world, ct.body, Vec3(Xb.E * (ct.point_w - Xb.r)), Jp, kDofs);
+    Vec3 t1, t2;
+    detail::tangent_basis(ct.normal_w, t1, t2);
+    const Vec3 dir[3] = {ct.normal_w, t1, t2};
+    for (int a = 0; a < 3; ++a) {
+      const int r = new_row(a == 0 ? RowKind::normal : RowKind::tangent, c);
+      for (int k = 0; k < n; ++k) cd.J[r][k] = dir[a][0] * Jp[k] + dir[a][1] * Jp[kDofs + k] + dir[a][2] * Jp[2 * kDofs + k];
+    }
+    const int rn = rows - 3;
+    const real s = ct.separation_m;
+    real target = s > 0 ? -s / dt_s : p.baumgarte * (-s > p.slop_m ? -s - p.slop_m : 0) / dt_s;
+    real v_before = 0;
+    for (int k = 0; k < n; ++k) v_before += cd.J[rn][k] * qd[k];
+    if (ct.restitution > 0 && v_before < -p.restitution_threshold_mps && s + dt_s * v_before <= 0)
+      target = std::max(target, -ct.restitution * v_before);
+    cd.target[rn] = target;
+  }
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i];
+    if (k < 0 || m.joint[i] == JointType::free) continue;
+    if (m.has_limit[i]) {
+      const real qi = q[m.q_index[i]];
+      const real gap[2] = {qi - m.q_min[i], m.q_max[i] - qi};  // lower, upper
+      const real toward[2] = {-v_free[k], v_free[k]};        // speed toward each limit
+      for (int side = 0; side < 2; ++side) {
+        if (gap[side] > p.limit_margin + dt_s * std::max(toward[side], real(0))) continue;
+        const int r = new_row(RowKind::limit, k);
+        cd.J[r][k] = side == 0 ? real(1) : real(-1);
+        cd.target[r] = gap[side] > 0 ? -gap[side] / dt_s : p.baumgarte * -gap[side] / dt_s;
+      }
+    }
+    if (m.friction_loss[i] > 0) {
+      const int r = new_row(RowKind::joint_friction, k);
+      cd.J[r][k] = 1;
+      cd.lo[r] = -m.friction_loss[i] * dt_s;
+      cd.hi[r] = m.friction_loss[i] * dt_s;
+    }
+  }
+  cd.num_rows = rows;
+
+  // Y = (H + h D)^-1 J^T, W = J Y, b = J v*.
+  for (int r = 0; r < rows; ++r) {
+    for (int k = 0; k < n; ++k) cd.Y[r][k] = cd.J[r][k];
+    detail::ltdl_solve(cd.H, cd.dof_parent, n, cd.Y[r]);
+    real bv = 0;
+    for (int k = 0; k < n; ++k) bv += cd.J[r][k] * v_free[k];
+    cd.b[r] = bv;
+  }
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c <= r; ++c) {
+      real w = 0;
+      for (int k = 0; k < n; ++k) w += cd.J[r][k] * cd.Y[c][k];
+      cd.W[r][c] = cd.W[c][r] = w;
+    }
+
+  // Projected Gauss-Seidel.
+  auto residual = [&](int r) {
+    real v = cd.b[r] - cd.target[r];
+    for (int c = 0; c < rows; ++c) v += cd.W[r][c] * cd.lambda[c];
+    return v;
+  };
+  int sweep = 0;
+  for (; sweep < p.iterations && rows > 0; ++sweep) {
+    real change = 0;
+    for (int r = 0; r < rows;) {
+      const real diag = cd.W[r][r] * (1 + p.regularization);
+      if (cd.kind[r] == RowKind::normal) {
+        // The normal row, then the contact's two friction rows projected onto the cone.
+        const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
+        change = std::max(change, std::fabs(ln - cd.lambda[r]) * diag);
+        cd.lambda[r] = ln;
+        real lt[2];
+        for (int a = 1; a <= 2; ++a) {
+          const real da = cd.W[r + a][r + a] * (1 + p.regularization);
+          lt[a - 1] = cd.lambda[r + a] - residual(r + a) / da;
+          cd.lambda[r + a] = lt[a - 1];  // Gauss-Seidel within the pair, projected below
+        }
+        const real limit = contacts[cd.owner[r]].friction * ln;
+        const real mag = std::sqrt(lt[0] * lt[0] + lt[1] * lt[1]);
+        const real scale = mag > limit ? (mag > 0 ? limit / mag : real(0)) : real(1);
+        for (int a = 1; a <= 2; ++a) {
+          const real v = lt[a - 1] * scale;
+          change = std::max(change, std::fabs(v - cd.lambda[r + a]) * cd.W[r + a][r + a]);
+          cd.lambda[r + a] = v;
+        }
+        r += 3;
+        continue;
+      }
+      real l = cd.lambda[r] - residual(r) / diag;
+      l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
+      change = std::max(change, std::fabs(l - cd.lambda[r]) * diag);
+      cd.lambda[r] = l;
+      ++r;
+    }
+    if (change <= p.tolerance_mps) {
+      ++sweep;
+      break;
+    }
+  }
+  cd.iterations_used = sweep;
+
+  // v = v* + Y^T lambda, then the positions with it.
+  real v_new[kDofs] = {};
+  for (int k = 0; k < n; ++k) v_new[k] = v_free[k];
+  for (int r = 0; r < rows; ++r)
+    for (int k = 0; k < n; ++k) v_new[k] += cd.Y[r][k] * cd.lambda[r];
+  if (!all_finite(v_new, n)) return Status::non_finite_input;
+  detail::integrate_positions(m, q, v_new, dt_s);
+  for (int k = 0; k < n; ++k) qd[k] = v_new[k];
+
+  for (int c = 0; c < num_contacts; ++c) cd.contact_force_w[c] = Vec3::Zero();
+  for (int k = 0; k < n; ++k) cd.joint_constraint_force[k] = 0;
+  for (int r = 0; r < rows; ++r) {
+    const real f = cd.lambda[r] / dt_s;
+    if (r < 3 * num_contacts) {  // contact rows come first, three per contact: normal, t1, t2
+      const ContactPoint& ct = contacts[r / 3];
+      Vec3 t1, t2;
+      detail::tangent_basis(ct.normal_w, t1, t2);
+      cd.contact_force_w[r / 3] += f * (r % 3 == 0 ? ct.normal_w : r % 3 == 1 ? t1 : t2);
+    } else {
+      cd.joint_constraint_force[cd.owner[r]] += f * cd.J[r][cd.owner[r]];
+    }
+  }
+  return Status::ok;
+}
+
+// ----------------------------------------------------------------------------------------------
+// Collision geometry against a half-space (the ground, a slope).
+
+enum class ShapeType : std::uint8_t { sphere = 0, capsule = 1, box = 2 };
+
+/// A collision primitive fixed on a body: its centre p_b and orientation R_b (shape -> body) in
+/// the body's frame; size: sphere [radius, -, -]; capsule [radius, half-length of the segment
+/// along the shape's z, -]; box [half extents]. Its friction coefficient and restitution.
+struct CollisionShape {
+  int body = -1;
+  ShapeType type = ShapeType::sphere;
+  Mat3 R_b = Mat3::Identity();
+  Vec3 p_b = Vec3::Zero();
+  Vec3 size = Vec3::Zero();
+  real friction = 1;
+  real restitution = 0;
+};
+
+/// The ground as the half-space n . x <= offset_m (n unit, world coordinates, pointing out of the
+/// ground), with its friction coefficient and restitution.
+struct HalfSpace {
+  Vec3 normal_w = Vec3(0, 0, 1);
+  real offset_m = 0;
+  real friction = 1;
+  real restitution = 0;
+};
+
+/// The contacts of the shapes with the half-space whose gap is below margin_m (a positive margin
+/// lets step_constrained catch a fast body at the step it arrives): a sphere's deepest point, a
+/// capsule's two end spheres, a box's corners. The pair's friction and restitution are the means
+/// of the two (PhysX's default combine mode, which legged_gym's friction ranges assume). Writes at
+/// most `capacity` contacts and returns how many were found (more than capacity: the caller's
+/// capacity is too small; the first `capacity` are written).
+inline int collide_halfspace(const CollisionShape* shapes, int num_shapes, const Transform* X_world, const HalfSpace& g,
+                             real margin_m, ContactPoint* out, int capacity) {
+  int found = 0;
+  auto add = [&](int body, const Vec3& point_w, real gap, const CollisionShape& s) {
+    if (!(gap < margin_m)) return;
+    if (found < capacity) {
+      ContactPoint& c = out[found];
+      c.body = body;
+      c.point_w = point_w;
+      c.normal_w = g.normal_w;
+      c.separation_m = gap;
+      c.friction = real(0.5) * (s.friction + g.friction);
+      c.restitution = real(0.5) * (s.restitution + g.restitution);
+    }
+    ++found;
+  };
+  for (int i = 0; i < num_shapes; ++i) {
+    const CollisionShape& s = shapes[i];
+    const Transform& X = X_world[s.body];
+    const Mat3 R_w = X.E.transpose() * s.R_b;  // shape -> world
+    const Vec3 c_w = X.r + X.E.transpose() * s.p_b;
+    switch (s.type) {
+      case ShapeType::sphere:
+        add(s.body, c_w - s.size[0] * g.normal_w, g.normal_w.dot(c_w) - g.offset_m - s.size[0], s);
+        break;
+      case ShapeType::capsule:
+        for (int e = -1; e <= 1; e += 2) {
+          const Vec3 end = c_w + R_w * Vec3(0, 0, real(e) * s.size[1]);
+          add(s.body, end - s.size[0] * g.normal_w, g.normal_w.dot(end) - g.offset_m - s.size[0], s);
+        }
+        break;
+      case ShapeType::box:
+        for (int k = 0; k < 8; ++k) {
+          const Vec3 corner = c_w + R_w * Vec3((k & 1) ? s.size[0] : -s.size[0], (k & 2) ? s.size[1] : -s.size[1],
+                                               (k & 4) ? s.size[2] : -s.size[2]);
+          add(s.body, corner, g.normal_w.dot(corner) - g.offset_m, s);
+        }
+        break;
+    }
+  }
+  return found;
+}
+
+}  // namespace kestrel::dynamics

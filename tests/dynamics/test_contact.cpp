@@ -1,0 +1,317 @@
+// Contacts with friction, joint limits and joint dry friction (dynamics/contact.hpp), on the host
+// and the emulated MCU: a sphere bounces to the height its restitution gives; a box on a 20-degree
+// slope stays with mu = 0.5 and slides with g (sin - mu cos) with mu = 0.2; a pendulum comes to rest
+// on its limit with the limit carrying gravity's torque; a joint's dry friction holds below its
+// breakaway torque and lets the excess accelerate above it; a floating tree spawned in the ground
+// under random torques stays finite; refusals leave the state alone; no heap.
+#include <cmath>
+
+#include "kestrel/dynamics/contact.hpp"
+#include "kestrel/kernel/rng.hpp"
+#include "ktest.hpp"
+
+using namespace kestrel;
+namespace dy = kestrel::dynamics;
+
+namespace {
+
+constexpr real kG = 9.81_r;
+
+dy::SpatialInertia solid(real mass, const Vec3& diag) {
+  dy::SpatialInertia b;
+  b.mass = mass;
+  b.com = Vec3::Zero();
+  b.inertia_com = diag.asDiagonal();
+  return b;
+}
+
+// One free body (a floating base with no children).
+void free_body(dy::MultibodyModel<1>& m, const dy::SpatialInertia& b) {
+  m.num_bodies = 1;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::free;
+  m.body[0] = b;
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+}
+
+using FreeData = dy::ConstraintData<1, 8>;
+
+// Steps a free body with one shape over a half-space; returns the status of the last step.
+Status step_free(const dy::MultibodyModel<1>& m, dy::MultibodyData<1>& d, FreeData& cd, const dy::CollisionShape& shape,
+                 const dy::HalfSpace& ground, real* q, real* qd, real dt) {
+  dy::ContactPoint contacts[8];
+  dy::forward_kinematics(m, d, q, cd.X_world);
+  const int found = dy::collide_halfspace(&shape, 1, cd.X_world, ground, real(0.05), contacts, 8);
+  const real tau[6] = {};
+  return dy::step_constrained(m, d, cd, q, qd, tau, dt, contacts, found);
+}
+
+}  // namespace
+
+KTEST(Contact, SphereBouncesToTheHeightItsRestitutionGives) {
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static FreeData cd;
+  const real r = 0.1_r;
+  free_body(m, solid(1, Vec3::Constant(real(0.4) * r * r)));
+  dy::CollisionShape ball;
+  ball.body = 0;
+  ball.size = Vec3(r, 0, 0);
+  for (real e : {real(0.5), real(0)}) {
+    ball.restitution = e;
+    dy::HalfSpace ground;
+    ground.restitution = e;  // combined: the mean, e
+    real q[7] = {0, 0, 1 + r, 0, 0, 0, 1}, qd[6] = {};
+    bool landed = false;
+    real apex = 0;
+    for (int k = 0; k < 2000; ++k) {  // 2 s at 1 ms: falls 1 m in 0.45 s, rises again
+      KASSERT_EQ(step_free(m, d, cd, ball, ground, q, qd, 1e-3_r), Status::ok);
+      if (!landed && qd[2] > 0) landed = true;
+      if (landed) apex = std::max(apex, q[2] - r);
+      KEXPECT_GE(q[2] - r, -real(2e-3));  // never sinks
+    }
+    KEXPECT_TRUE(landed || e == 0);
+    // Newton's law: the rebound speed e v, the height e^2 h (1 m dropped).
+    KEXPECT_CLOSE(apex, e * e, 0.01, 0, "apex above the ground (m)");
+  }
+}
+
+KTEST(Contact, BoxOnASlopeStaysOrSlidesByCoulomb) {
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static FreeData cd;
+  const real h = 0.1_r, mass = 2;
+  free_body(m, solid(mass, Vec3::Constant(mass * (h * h + h * h) * 4 / 12)));
+  const real theta = 20 * kPi / 180;
+  dy::HalfSpace slope;  // z = x tan(theta): rising toward +x
+  slope.normal_w = Vec3(-std::sin(theta), 0, std::cos(theta));
+  const Vec3 downhill(-std::cos(theta), 0, -std::sin(theta));
+  dy::CollisionShape box;
+  box.body = 0;
+  box.type = dy::ShapeType::box;
+  box.size = Vec3(h, h, h);
+  for (real mu : {real(0.5), real(0.2)}) {
+    box.friction = slope.friction = mu;
+    // The box's z along the slope's normal (a turn of -theta about y), its bottom face on the slope.
+    const Vec3 c = h * slope.normal_w;
+    real q[7] = {c[0], c[1], c[2], 0, std::sin(-theta / 2), 0, std::cos(-theta / 2)}, qd[6] = {};
+    const real dt = 0.005_r;  // legged_gym's physics step
+    Vec3 force_sum = Vec3::Zero();
+    for (int k = 0; k < 200; ++k) {  // 1 s
+      KASSERT_EQ(step_free(m, d, cd, box, slope, q, qd, dt), Status::ok);
+      if (k == 199)
+        for (int i = 0; i < 4; ++i) force_sum += cd.contact_force_w[i];
+    }
+    const Vec3 moved = Vec3(q[0], q[1], q[2]) - c;
+    // The base's linear velocity is in its own frame: turned to the world's.
+    const Vec3 v_w = rotate(quat_from_xyzw(q + 3), Vec3(qd[0], qd[1], qd[2]));
+    if (mu > std::tan(theta)) {
+      KEXPECT_LT(moved.norm(), real(1e-3));  // static friction holds (tan 20 deg = 0.36 < 0.5)
+      // The four corners together carry the weight.
+      KEXPECT_CLOSE(force_sum[2], mass * kG, 0, 0.01, "vertical contact force (N)");
+      KEXPECT_CLOSE(force_sum[0], 0, 0.01 * mass * kG, 0, "horizontal contact force (N)");
+    } else {
+      const real a = kG * (std::sin(theta) - mu * std::cos(theta));  // 1.512 m/s^2
+      KEXPECT_CLOSE(v_w.dot(downhill), a * 1, 0, 0.02, "speed down the slope after 1 s (m/s)");
+      KEXPECT_CLOSE(moved.dot(downhill), a / 2, 0, 0.03, "distance down the slope after 1 s (m)");
+      KEXPECT_LT(std::fabs(moved.dot(slope.normal_w)), real(2e-3));  // slides on its face, does not tip
+      KEXPECT_LT(std::fabs(v_w[1]), real(1e-3));
+    }
+  }
+}
+
+KTEST(Contact, PendulumComesToRestOnItsLimit) {
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static dy::ConstraintData<1, 1> cd;
+  const real mass = 1, l = 0.5_r;
+  m.num_bodies = 1;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::revolute;
+  m.axis[0] = Vec3(0, 1, 0);
+  m.body[0] = solid(mass, Vec3::Constant(real(0.01)));
+  m.body[0].com = Vec3(l, 0, 0);  // gravity turns it toward +q
+  m.has_limit[0] = true;
+  m.q_min[0] = -0.5_r;
+  m.q_max[0] = 0.5_r;
+  m.damping[0] = 0.05_r;
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  real q[1] = {0}, qd[1] = {0};
+  const real tau[1] = {0};
+  real deepest = 0;
+  for (int k = 0; k < 600; ++k) {  // 3 s at 5 ms
+    KASSERT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0), Status::ok);
+    deepest = std::max(deepest, q[0] - m.q_max[0]);
+  }
+  KEXPECT_LT(deepest, real(2e-3));  // hits the stop without passing it
+  KEXPECT_CLOSE(q[0], m.q_max[0], 1e-3, 0, "rest angle (rad)");
+  KEXPECT_LT(std::fabs(qd[0]), real(1e-3));
+  // At rest the limit carries gravity's torque about the axis, m g l cos(q).
+  KEXPECT_CLOSE(cd.joint_constraint_force[0], -mass * kG * l * std::cos(q[0]), 0, 0.01, "limit torque (N m)");
+}
+
+KTEST(Contact, JointDryFrictionHoldsBelowBreakawayAndSlipsAbove) {
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static dy::ConstraintData<1, 1> cd;
+  m.num_bodies = 1;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::revolute;
+  m.axis[0] = Vec3(0, 0, 1);  // vertical: gravity does no work
+  m.body[0] = solid(2, Vec3(0.1_r, 0.1_r, 0.2_r));
+  m.friction_loss[0] = 1;  // N m
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  for (real torque : {real(0.8), real(1.5), real(-1.5)}) {
+    real q[1] = {0}, qd[1] = {0};
+    const real tau[1] = {torque};
+    for (int k = 0; k < 200; ++k)  // 1 s
+      KASSERT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0), Status::ok);
+    if (std::fabs(torque) < 1) {
+      KEXPECT_LT(std::fabs(qd[0]), real(1e-5));
+      KEXPECT_LT(std::fabs(q[0]), real(1e-5));
+      KEXPECT_CLOSE(cd.joint_constraint_force[0], -torque, 0, 1e-3, "friction torque at rest (N m)");
+    } else {
+      const real excess = torque - std::copysign(real(1), torque);
+      KEXPECT_CLOSE(qd[0], excess / real(0.2), 0, 0.01, "speed after 1 s (rad/s)");  // (tau - F) / I t
+    }
+  }
+}
+
+KTEST(Contact, FloatingTreeSpawnedInTheGroundStaysFinite) {
+  // A base with two legs of two links each, spheres on every link, spawned up to 20 cm deep in the
+  // ground, under random joint torques of up to 50 N m with limits and dry friction.
+  static dy::MultibodyModel<5> m;
+  static dy::MultibodyData<5> d;
+  static dy::ConstraintData<5, 8> cd;
+  m.num_bodies = 5;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::free;
+  m.body[0] = solid(5, Vec3(0.05_r, 0.1_r, 0.1_r));
+  const int parents[5] = {-1, 0, 1, 0, 3};
+  for (int i = 1; i < 5; ++i) {
+    m.parent[i] = parents[i];
+    m.joint[i] = dy::JointType::revolute;
+    m.axis[i] = Vec3(0, 1, 0);
+    m.X_tree[i].r = parents[i] == 0 ? Vec3(i == 1 ? 0.2_r : -0.2_r, 0, 0) : Vec3(0, 0, -0.2_r);
+    m.body[i] = solid(0.5_r, Vec3::Constant(real(2e-3)));
+    m.body[i].com = Vec3(0, 0, -0.1_r);
+    m.has_limit[i] = true;
+    m.q_min[i] = -1.5_r;
+    m.q_max[i] = 1.5_r;
+    m.friction_loss[i] = 0.2_r;
+    m.damping[i] = 0.1_r;
+  }
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  dy::CollisionShape shapes[5];
+  for (int i = 0; i < 5; ++i) {
+    shapes[i].body = i;
+    shapes[i].type = i == 0 ? dy::ShapeType::box : dy::ShapeType::sphere;
+    shapes[i].size = i == 0 ? Vec3(0.25_r, 0.1_r, 0.05_r) : Vec3(0.03_r, 0, 0);
+    shapes[i].p_b = i == 0 ? Vec3::Zero() : Vec3(0, 0, -0.2_r);
+  }
+  RngStream rng(2026, 7, 3);
+  for (int trial = 0; trial < 4; ++trial) {
+    real q[11] = {0, 0, rng.uniform(-0.2_r, 0.3_r), 0, 0, 0, 1}, qd[10] = {};
+    for (int k = 0; k < 300; ++k) {
+      real tau[10] = {};
+      for (int j = 6; j < 10; ++j) tau[j] = rng.uniform(-50, 50);
+      dy::ContactPoint contacts[8];
+      dy::forward_kinematics(m, d, q, cd.X_world);
+      const int found = dy::collide_halfspace(shapes, 5, cd.X_world, dy::HalfSpace(), real(0.02), contacts, 8);
+      KASSERT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, contacts, std::min(found, 8)), Status::ok);
+      KEXPECT_TRUE(all_finite(q, 11) && all_finite(qd, 10));
+    }
+    KEXPECT_GT(q[2], real(-0.05));  // pushed out of the ground, not fallen through it
+  }
+}
+
+KTEST(Contact, RefusalsLeaveTheStateAlone) {
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static FreeData cd;
+  free_body(m, solid(1, Vec3::Constant(real(0.01))));
+  real q[7] = {0, 0, 0.05_r, 0, 0, 0, 1}, qd[6] = {0, 0, -1, 0, 0, 0};
+  const real q0[7] = {0, 0, 0.05_r, 0, 0, 0, 1};
+  real tau[6] = {};
+  dy::ContactPoint c;
+  c.body = 0;
+  c.separation_m = -0.01_r;
+  auto unchanged = [&] {
+    for (int k = 0; k < 7; ++k) KEXPECT_EQ(q[k], q0[k]);
+    KEXPECT_EQ(qd[2], real(-1));
+  };
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0, &c, 1), Status::invalid_argument);
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &c, 9), Status::invalid_argument);  // > capacity
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 1), Status::invalid_argument);
+  dy::ContactPoint bad = c;
+  bad.normal_w = Vec3(0, 0, 2);
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &bad, 1), Status::invalid_argument);
+  bad = c;
+  bad.friction = -1;
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &bad, 1), Status::invalid_argument);
+  bad = c;
+  bad.restitution = 1.5_r;
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &bad, 1), Status::invalid_argument);
+  bad = c;
+  bad.body = 1;
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &bad, 1), Status::invalid_argument);
+  bad = c;
+  bad.separation_m = std::numeric_limits<real>::quiet_NaN();
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &bad, 1), Status::invalid_argument);
+  tau[2] = std::numeric_limits<real>::infinity();
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &c, 1), Status::non_finite_input);
+  unchanged();
+  tau[2] = 0;
+  // And the same step accepted pushes the body out: the normal impulse stops the fall.
+  KEXPECT_NO_HEAP(KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, &c, 1), Status::ok));
+  KEXPECT_GE(qd[2], real(0));
+  KEXPECT_GT(cd.contact_force_w[0][2], real(0));
+}
+
+KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
+  // The mass-matrix path (CRBA and the branch-sparse L^T D L solve) against ABA's: a floating base
+  // with two two-link legs, damped joints, random states and torques, one step each.
+  static dy::MultibodyModel<5> m;
+  static dy::MultibodyData<5> d;
+  static dy::ConstraintData<5, 1> cd;
+  m.num_bodies = 5;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::free;
+  m.body[0] = solid(5, Vec3(0.05_r, 0.1_r, 0.1_r));
+  const int parents[5] = {-1, 0, 1, 0, 3};
+  for (int i = 1; i < 5; ++i) {
+    m.parent[i] = parents[i];
+    m.joint[i] = i % 2 ? dy::JointType::revolute : dy::JointType::prismatic;
+    m.axis[i] = i < 3 ? Vec3(0, 1, 0) : Vec3(0.6_r, 0, 0.8_r);
+    m.X_tree[i].r = Vec3(0.1_r * i, -0.05_r, -0.2_r);
+    m.body[i] = solid(0.5_r + 0.1_r * i, Vec3(2e-3_r, 3e-3_r, 1e-3_r));
+    m.body[i].com = Vec3(0.01_r, 0, -0.1_r);
+    m.damping[i] = 0.3_r;
+    m.armature[i] = 0.01_r;
+  }
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  RngStream rng(2026, 11, 5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec4 quat = Vec4(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized();
+    real q[11] = {rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1), quat[0], quat[1], quat[2], quat[3]};
+    real qd[10], tau[10];
+    for (int k = 7; k < 11; ++k) q[k] = rng.uniform(-1, 1);
+    for (int k = 0; k < 10; ++k) {
+      qd[k] = rng.uniform(-2, 2);
+      tau[k] = rng.uniform(-5, 5);
+    }
+    real q2[11], qd2[10], qd0[10];
+    for (int k = 0; k < 11; ++k) q2[k] = q[k];
+    for (int k = 0; k < 10; ++k) qd2[k] = qd0[k] = qd[k];
+    real qdd[10];
+    KASSERT_EQ(dy::step_semi_implicit(m, d, q, qd, tau, 0.005_r, qdd), Status::ok);
+    KASSERT_EQ(dy::step_constrained(m, d, cd, q2, qd2, tau, 0.005_r, nullptr, 0), Status::ok);
+    const double tol = sizeof(real) == 4 ? 2e-4 : 1e-10;
+    for (int k = 0; k < 10; ++k) {
+      KEXPECT_CLOSE(qd2[k], qd[k], tol, tol, "velocity after one step");
+      // The accelerations themselves (the velocity change over dt): float rounding of qd (~2) / dt.
+      KEXPECT_CLOSE((qd2[k] - qd0[k]) / 0.005_r, qdd[k], sizeof(real) == 4 ? 2e-3 : 1e-8, 1e-4, "acceleration");
+    }
+    for (int k = 0; k < 11; ++k) KEXPECT_CLOSE(q2[k], q[k], tol, tol, "position after one step");
+  }
+}
