@@ -6,6 +6,7 @@
 // a bent stance with joint velocities, the trunk tilted and moving.
 #pragma once
 
+#include "kestrel/dynamics/contact.hpp"
 #include "kestrel/dynamics/multibody.hpp"
 
 namespace kestrel::bench_trees {
@@ -60,6 +61,37 @@ inline void quadruped_state(bool floating, real* q, real* qd, real* qdd) {
     qd[base_v + k] = 0.1_r * static_cast<real>(k % 5) - 0.2_r;
     qdd[base_v + k] = 0.3_r * static_cast<real>(k % 4) - 0.4_r;
   }
+}
+
+/// The feet: a 2 cm sphere at the end of each calf (bodies 3, 6, 9, 12), friction 1.
+inline void quadruped_feet(dynamics::CollisionShape* feet) {
+  for (int leg = 0; leg < 4; ++leg) {
+    feet[leg] = dynamics::CollisionShape{};
+    feet[leg].body = 3 + 3 * leg;
+    feet[leg].p_b = Vec3(0, 0, -0.21_r);
+    feet[leg].size = Vec3(0.02_r, 0, 0);
+  }
+}
+
+/// The floating tree standing at rest on the plane z = 0: trunk level, legs at the bent stance of
+/// quadruped_state (hip 0.05, thigh 0.8, knee -1.5 rad), the trunk at the height where the lowest
+/// foot touches the ground (found by forward kinematics).
+inline void quadruped_standing_state(const dynamics::MultibodyModel<13>& m, dynamics::MultibodyData<13>& d, real* q,
+                                     real* qd) {
+  const real base[7] = {0, 0, 0, 0, 0, 0, 1};
+  for (int k = 0; k < 7; ++k) q[k] = base[k];
+  for (int k = 0; k < 12; ++k) q[7 + k] = k % 3 == 0 ? 0.05_r : k % 3 == 1 ? 0.8_r : -1.5_r;
+  for (int k = 0; k < 18; ++k) qd[k] = 0;
+  dynamics::Transform X[13];
+  dynamics::forward_kinematics(m, d, q, X);
+  dynamics::CollisionShape feet[4];
+  quadruped_feet(feet);
+  real lowest = 0;
+  for (const auto& f : feet) {
+    const Vec3 p = X[f.body].r + X[f.body].E.transpose() * f.p_b;
+    lowest = p[2] - f.size[0] < lowest ? p[2] - f.size[0] : lowest;
+  }
+  q[2] = -lowest;
 }
 
 }  // namespace kestrel::bench_trees

@@ -315,3 +315,69 @@ KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
     for (int k = 0; k < 11; ++k) KEXPECT_CLOSE(q2[k], q[k], tol, tol, "position after one step");
   }
 }
+
+KTEST(Contact, ARowNothingCanMoveGetsNoImpulse) {
+  // A welded base (no degrees of freedom) in the ground with an arm on a hinge above it: the
+  // base's contact rows are all zero and must neither divide by zero nor stop the arm's step.
+  static dy::MultibodyModel<2> m;
+  static dy::MultibodyData<2> d;
+  static dy::ConstraintData<2, 2> cd;
+  m.num_bodies = 2;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::fixed;
+  m.body[0] = solid(3, Vec3::Constant(real(0.05)));
+  m.parent[1] = 0;
+  m.joint[1] = dy::JointType::revolute;
+  m.axis[1] = Vec3(0, 1, 0);
+  m.X_tree[1].r = Vec3(0, 0, 0.5_r);
+  m.body[1] = solid(1, Vec3::Constant(real(0.01)));
+  m.body[1].com = Vec3(0.3_r, 0, 0);
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  dy::ContactPoint c[2];
+  c[0].body = 0;
+  c[0].separation_m = -0.01_r;
+  c[1] = c[0];
+  c[1].point_w = Vec3(0.1_r, 0, 0);
+  real q[1] = {0}, qd[1] = {0};
+  const real tau[1] = {0};
+  KASSERT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, c, 2), Status::ok);
+  KEXPECT_TRUE(all_finite(q, 1) && all_finite(qd, 1));
+  KEXPECT_GT(qd[0], real(0));  // the arm falls (gravity turns it toward +q about y)
+  KEXPECT_EQ(cd.contact_force_w[0][2], real(0));
+}
+
+KTEST(Contact, ImplicitDriveGainsKeepALightJointStable) {
+  // A light link (I = 0.003 kg m^2 about a vertical axis) under PD kp = 40 N m/rad, kd = 2 N m s/rad
+  // at h = 5 ms: kd h / I = 3.3 > 2, so the explicit PD diverges; taken implicitly it settles.
+  static dy::MultibodyModel<1> m;
+  static dy::MultibodyData<1> d;
+  static dy::ConstraintData<1, 1> cd;
+  m.num_bodies = 1;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::revolute;
+  m.axis[0] = Vec3(0, 0, 1);
+  m.body[0] = solid(0.2_r, Vec3(0.003_r, 0.003_r, 0.003_r));
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  const real kp[1] = {40}, kd[1] = {2}, target = 0.5_r;
+  for (int implicit = 0; implicit < 2; ++implicit) {
+    real q[1] = {0}, qd[1] = {0};
+    real largest = 0;
+    for (int k = 0; k < 200; ++k) {
+      const real tau[1] = {kp[0] * (target - q[0]) - kd[0] * qd[0]};
+      const Status st = implicit ? dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0, dy::ConstraintParams(), kp, kd)
+                                 : dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0);
+      if (st != Status::ok) break;
+      largest = std::max(largest, std::fabs(q[0]));
+    }
+    if (implicit) {
+      KEXPECT_CLOSE(q[0], target, 1e-4, 0, "settled angle (rad)");
+      KEXPECT_LT(largest, target * real(1.05));  // overdamped: no real overshoot
+    } else {
+      KEXPECT_GT(largest, real(10));  // the explicit PD's divergence the implicit gains remove
+    }
+  }
+  real q[1] = {0}, qd[1] = {0};
+  const real tau[1] = {0}, bad_kp[1] = {-1};
+  KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0, dy::ConstraintParams(), bad_kp, kd),
+             Status::invalid_argument);
+}

@@ -421,6 +421,22 @@ int main() {
     bench("crba_quadruped_floating_18dof", "floating_base_13_bodies", 10, [] { dy::crba(robot, dd, fq, fH, 18); });
     bench("aba_quadruped_floating_18dof", "floating_base_13_bodies", 10,
           [] { g_sink = static_cast<std::uint32_t>(dy::aba(robot, dd, fq, fqd, ftau, fqdd)); });
+    // One physics step of the same robot standing on the ground (dynamics/contact.hpp): the four
+    // feet against the plane, then the constrained step (mass matrix, its factors, 12 contact rows,
+    // projected Gauss-Seidel). The state is restored before each call, so every call does the same work.
+    static dy::ConstraintData<13, 4> cd;
+    static dy::CollisionShape feet[4];
+    static real sq0[19], sqd0[18], sq[19], sqd[18], stau[18];
+    kestrel::bench_trees::quadruped_feet(feet);
+    kestrel::bench_trees::quadruped_standing_state(robot, dd, sq0, sqd0);
+    bench("step_constrained_quadruped_4_feet", "floating_base_13_bodies", 10, [] {
+      for (int k = 0; k < 19; ++k) sq[k] = sq0[k];
+      for (int k = 0; k < 18; ++k) sqd[k] = sqd0[k];
+      dy::ContactPoint contacts[4];
+      dy::forward_kinematics(robot, dd, sq, cd.X_world);
+      const int n = dy::collide_halfspace(feet, 4, cd.X_world, dy::HalfSpace(), 0.01_r, contacts, 4);
+      g_sink = static_cast<std::uint32_t>(dy::step_constrained(robot, dd, cd, sq, sqd, stau, 0.005_r, contacts, n));
+    });
   }
   // The plant the firmware example closes the loop with (not part of the control stack).
   const Wrench hover_w = Wrench::from_vec6(hover_q);

@@ -79,7 +79,8 @@ struct ConstraintData {
   int dof_parent[kDofs];  // the velocity coordinate each one hangs from (-1: none)
   Transform X_world[kMaxBodies];
   real J[kRows][kDofs];  // constraint rows
-  real Y[kRows][kDofs];  // (H + h D)^-1 J_i^T
+  real Z[kRows][kDofs];  // L^-T J_i^T: half of the solve, W = Z^T D^-1 Z
+  std::int16_t leaf[kRows];  // the deepest velocity coordinate row i involves (its chain up from there; -1: none)
   real W[kRows][kRows];  // Delassus matrix
   real b[kRows], target[kRows], lambda[kRows], lo[kRows], hi[kRows];
   RowKind kind[kRows];
@@ -170,10 +171,18 @@ bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count
 /// non-unit normal, negative friction, restitution outside [0, 1]); non_finite_input as aba's
 /// (non-finite input, a singular mass matrix, a result that would not be finite). On any refusal
 /// q and qd are left as they were.
+///
+/// drive_kp, drive_kd (per velocity coordinate, N m/rad and N m s/rad, or null): the stiffness and
+/// damping of the joint drives whose torques tau already holds (a PD law kp (q* - q) - kd qd). They
+/// are taken implicitly, at the end of the step, as MuJoCo's implicit integrators treat actuator
+/// gains (and D. Baraff, A. Witkin, "Large steps in cloth simulation", SIGGRAPH 1998, springs):
+/// the explicit PD of legged_gym needs kd h < 2 I on every joint, which a light calf (I ~ 0.003
+/// kg m^2) with kd = 2 at h = 5 ms breaks; this does not.
 template <int N, int C>
 [[nodiscard]] Status step_constrained(const MultibodyModel<N>& m, MultibodyData<N>& d, ConstraintData<N, C>& cd, real* q,
                                       real* qd, const real* tau, real dt_s, const ContactPoint* contacts, int num_contacts,
-                                      const ConstraintParams& p = ConstraintParams()) {
+                                      const ConstraintParams& p = ConstraintParams(), const real* drive_kp = nullptr,
+                                      const real* drive_kd = nullptr) {
   using CD = ConstraintData<N, C>;
   constexpr int kDofs = CD::kDofs;
   const int n = m.num_dofs;
@@ -194,9 +203,19 @@ template <int N, int C>
     if (m.dof_index[i] >= 0 && m.joint[i] != JointType::free) cd.H[m.dof_index[i]][m.dof_index[i]] += dt_s * m.damping[i];
   real zero[kDofs] = {}, acc[kDofs];
   rnea(m, d, q, qd, zero, acc);
+  for (int k = 0; k < n; ++k) acc[k] = tau[k] - acc[k];
+  if (drive_kp != nullptr || drive_kd != nullptr) {
+    // The drives' torques in tau, kp (q* - q) - kd qd, taken at the end of the step:
+    // (H + h kd + h^2 kp) a = tau - bias - h kp qd.
+    for (int k = 0; k < n; ++k) {
+      const real kp = drive_kp != nullptr ? drive_kp[k] : real(0), kd = drive_kd != nullptr ? drive_kd[k] : real(0);
+      if (!(kp >= 0) || !(kd >= 0) || !is_finite(kp) || !is_finite(kd)) return Status::invalid_argument;
+      cd.H[k][k] += dt_s * kd + dt_s * dt_s * kp;
+      acc[k] -= dt_s * kp * qd[k];
+    }
+  }
   detail::dof_parents(m, cd.dof_parent);
   if (!detail::ltdl_factor(cd.H, cd.dof_parent, n)) return Status::non_finite_input;
-  for (int k = 0; k < n; ++k) acc[k] = tau[k] - acc[k];
   detail::ltdl_solve(cd.H, cd.dof_parent, n, acc);
   real v_free[kDofs];
   for (int k = 0; k < n; ++k) v_free[k] = qd[k] + dt_s * acc[k];
@@ -211,6 +230,7 @@ template <int N, int C>
     cd.kind[r] = kind;
     cd.owner[r] = static_cast<std::int16_t>(owner);
     cd.lambda[r] = 0;
+    cd.leaf[r] = -1;
     cd.target[r] = 0;
     cd.lo[r] = 0;
     cd.hi[r] = std::numeric_limits<real>::infinity();
@@ -224,8 +244,12 @@ template <int N, int C>
     Vec3 t1, t2;
     detail::tangent_basis(ct.normal_w, t1, t2);
     const Vec3 dir[3] = {ct.normal_w, t1, t2};
+    int leaf = -1;  // the last velocity coordinate on the body's chain
+    for (int b = ct.body; b >= 0 && leaf < 0; b = m.parent[b])
+      if (m.dof_index[b] >= 0) leaf = m.dof_index[b] + joint_dofs(m, b) - 1;
     for (int a = 0; a < 3; ++a) {
       const int r = new_row(a == 0 ? RowKind::normal : RowKind::tangent, c);
+      cd.leaf[r] = static_cast<std::int16_t>(leaf);
       for (int k = 0; k < n; ++k) cd.J[r][k] = dir[a][0] * Jp[k] + dir[a][1] * Jp[kDofs + k] + dir[a][2] * Jp[2 * kDofs + k];
     }
     const int rn = rows - 3;
@@ -247,12 +271,14 @@ template <int N, int C>
       for (int side = 0; side < 2; ++side) {
         if (gap[side] > p.limit_margin + dt_s * std::max(toward[side], real(0))) continue;
         const int r = new_row(RowKind::limit, k);
+        cd.leaf[r] = static_cast<std::int16_t>(k);
         cd.J[r][k] = side == 0 ? real(1) : real(-1);
         cd.target[r] = gap[side] > 0 ? -gap[side] / dt_s : p.baumgarte * -gap[side] / dt_s;
       }
     }
     if (m.friction_loss[i] > 0) {
       const int r = new_row(RowKind::joint_friction, k);
+      cd.leaf[r] = static_cast<std::int16_t>(k);
       cd.J[r][k] = 1;
       cd.lo[r] = -m.friction_loss[i] * dt_s;
       cd.hi[r] = m.friction_loss[i] * dt_s;
@@ -260,18 +286,23 @@ template <int N, int C>
   }
   cd.num_rows = rows;
 
-  // Y = (H + h D)^-1 J^T, W = J Y, b = J v*.
+  // W = J (H + h D)^-1 J^T = Z^T D^-1 Z with Z = L^-T J^T, each column solved along the row's chain
+  // of velocity coordinates alone (a foot's row touches the base and its leg, nothing else), which
+  // is where the tree's sparsity pays (RBDA section 6.5); b = J v*.
   for (int r = 0; r < rows; ++r) {
-    for (int k = 0; k < n; ++k) cd.Y[r][k] = cd.J[r][k];
-    detail::ltdl_solve(cd.H, cd.dof_parent, n, cd.Y[r]);
+    real* z = cd.Z[r];
+    for (int k = 0; k < n; ++k) z[k] = 0;
+    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) z[i] = cd.J[r][i];
+    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i])
+      for (int j = cd.dof_parent[i]; j >= 0; j = cd.dof_parent[j]) z[j] -= cd.H[i][j] * z[i];
     real bv = 0;
-    for (int k = 0; k < n; ++k) bv += cd.J[r][k] * v_free[k];
+    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) bv += cd.J[r][i] * v_free[i];
     cd.b[r] = bv;
   }
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c <= r; ++c) {
       real w = 0;
-      for (int k = 0; k < n; ++k) w += cd.J[r][k] * cd.Y[c][k];
+      for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) w += cd.Z[r][i] * cd.Z[c][i] / cd.H[i][i];
       cd.W[r][c] = cd.W[c][r] = w;
     }
 
@@ -286,6 +317,10 @@ template <int N, int C>
     real change = 0;
     for (int r = 0; r < rows;) {
       const real diag = cd.W[r][r] * (1 + p.regularization);
+      if (!(diag > 0)) {  // a row nothing can move (a contact on a welded base): no impulse
+        r += cd.kind[r] == RowKind::normal ? 3 : 1;
+        continue;
+      }
       if (cd.kind[r] == RowKind::normal) {
         // The normal row, then the contact's two friction rows projected onto the cone.
         const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
@@ -294,7 +329,7 @@ template <int N, int C>
         real lt[2];
         for (int a = 1; a <= 2; ++a) {
           const real da = cd.W[r + a][r + a] * (1 + p.regularization);
-          lt[a - 1] = cd.lambda[r + a] - residual(r + a) / da;
+          lt[a - 1] = da > 0 ? cd.lambda[r + a] - residual(r + a) / da : real(0);
           cd.lambda[r + a] = lt[a - 1];  // Gauss-Seidel within the pair, projected below
         }
         const real limit = contacts[cd.owner[r]].friction * ln;
@@ -323,9 +358,10 @@ template <int N, int C>
 
   // v = v* + Y^T lambda, then the positions with it.
   real v_new[kDofs] = {};
-  for (int k = 0; k < n; ++k) v_new[k] = v_free[k];
   for (int r = 0; r < rows; ++r)
-    for (int k = 0; k < n; ++k) v_new[k] += cd.Y[r][k] * cd.lambda[r];
+    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) v_new[i] += cd.J[r][i] * cd.lambda[r];
+  detail::ltdl_solve(cd.H, cd.dof_parent, n, v_new);  // (H + h D)^-1 J^T lambda
+  for (int k = 0; k < n; ++k) v_new[k] += v_free[k];
   if (!all_finite(v_new, n)) return Status::non_finite_input;
   detail::integrate_positions(m, q, v_new, dt_s);
   for (int k = 0; k < n; ++k) qd[k] = v_new[k];
