@@ -95,7 +95,8 @@ struct ModelDeleter {
   void operator()(mjModel* m) const { mj_deleteModel(m); }
 };
 
-// mj_loadXML keeps a global parser state in MuJoCo 2.2: one load at a time.
+// mj_loadXML keeps the last model it compiled in a global (for mj_saveLastXML) in MuJoCo 2.2: one
+// load at a time.
 std::mutex& load_mutex() {
   static std::mutex m;
   return m;

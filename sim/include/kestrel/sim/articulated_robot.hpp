@@ -36,8 +36,8 @@
 //    geom is the first sphere on it (-1: none).
 //  - The keyframe named "home", if any, as a configuration in the core's coordinates (the free
 //    joint's quaternion turned from MuJoCo's w x y z to x y z w).
-//  - Tendons, equality constraints, mocap bodies and flex/skin-like extras the core cannot hold are
-//    refused; actuators, sensors, sites, cameras, lights are ignored (but for the effort limits).
+//  - Tendons, equality constraints and mocap bodies (which the core's open chains cannot hold) are
+//    refused; actuators (but for the effort limits), sensors, sites, cameras and lights are ignored.
 #pragma once
 
 #include <cstdint>
