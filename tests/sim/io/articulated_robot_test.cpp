@@ -202,6 +202,10 @@ TEST(SimArticulatedRobot, ErrorsNameTheFileAndTheProblem) {
       {"massless.xml",
        "<mujoco><worldbody><body name=\"a\">" + body + "<joint name=\"j\"/><body name=\"tip\"/></body></worldbody></mujoco>",
        "body \"tip\": mass 0"},
+      {"mesh.xml",
+       "<mujoco><asset><mesh name=\"tet\" vertex=\"0 0 0 0.1 0 0 0 0.1 0 0 0 0.1\"/></asset><worldbody><body name=\"a\">" +
+           body + "<joint name=\"j\"/><geom name=\"hull\" type=\"mesh\" mesh=\"tet\"/></body></worldbody></mujoco>",
+       "geom \"hull\" (in body \"a\"): mesh collision is not supported"},
       {"asymmetric.xml",
        "<mujoco><worldbody><body name=\"a\">" + body +
            "<joint name=\"j\"/></body></worldbody><actuator><motor name=\"m\" joint=\"j\" ctrllimited=\"true\" ctrlrange=\"-1 2\"/></actuator></mujoco>",
@@ -242,4 +246,38 @@ TEST(SimArticulatedRobot, JointOffsetMovesTheBodyFrameToTheJoint) {
   }
   EXPECT_NEAR(ra.multibody.X_tree[0].r[2], 1.0, 1e-6);
   EXPECT_NEAR(ra.multibody.body[0].com[2], -0.5, 1e-6);
+}
+
+TEST(SimArticulatedRobot, BodiesWeldedToTheWorldArePartOfIt) {
+  // A floor plane and a static box body in the world, then a hinged arm under the static body: the
+  // arm is body 0 (from the world, at the static body's pose), the plane and the box are world
+  // geoms (body -1) at their world poses, and a visual-only geom is left out.
+  const std::string path = write_temp(
+      "welded.xml",
+      "<mujoco><worldbody><geom name=\"floor\" type=\"plane\" size=\"5 5 0.1\"/>"
+      "<body name=\"stand\" pos=\"1 0 0.5\" quat=\"0.7071068 0 0 0.7071068\"><geom name=\"post\" type=\"box\" size=\"0.1 0.1 0.5\" pos=\"0 0 -0.25\"/>"
+      "<body name=\"arm\" pos=\"0.2 0 0\"><inertial pos=\"0.3 0 0\" mass=\"1\" diaginertia=\"0.01 0.02 0.02\"/>"
+      "<joint name=\"shoulder\" axis=\"0 1 0\"/><geom type=\"capsule\" fromto=\"0 0 0 0.6 0 0\" size=\"0.05\" mass=\"0\"/>"
+      "<geom type=\"sphere\" size=\"0.2\" contype=\"0\" conaffinity=\"0\" mass=\"0\"/></body></body></worldbody></mujoco>");
+  const ArticulatedRobot r = load(path);
+  ASSERT_EQ(r.multibody.num_bodies, 1);
+  EXPECT_EQ(r.body_names[0], "arm");
+  EXPECT_EQ(r.multibody.parent[0], -1);
+  EXPECT_EQ(r.multibody.num_dofs, 1);
+  // Placed at the stand's pose: (1, 0, 0.5) + Rz(90 deg) (0.2, 0, 0) = (1, 0.2, 0.5).
+  EXPECT_NEAR(r.multibody.X_tree[0].r[0], 1.0, 1e-6);
+  EXPECT_NEAR(r.multibody.X_tree[0].r[1], 0.2, 1e-6);
+  EXPECT_NEAR(r.multibody.X_tree[0].r[2], 0.5, 1e-6);
+  EXPECT_NEAR(r.multibody.X_tree[0].E(0, 1), 1.0, 1e-6);  // E = Rz(90 deg)^T
+  ASSERT_EQ(r.geoms.size(), 3u);  // floor, post, the arm's capsule (the sphere is visual only)
+  EXPECT_EQ(r.geoms[0].name, "floor");
+  EXPECT_EQ(r.geoms[0].type, RobotGeomType::plane);
+  EXPECT_EQ(r.geoms[0].body, -1);
+  EXPECT_EQ(r.geoms[1].name, "post");
+  EXPECT_EQ(r.geoms[1].body, -1);
+  EXPECT_NEAR(r.geoms[1].pos_b[2], 0.25, 1e-6);  // 0.5 - 0.25, in the world
+  EXPECT_EQ(r.geoms[2].type, RobotGeomType::capsule);
+  EXPECT_EQ(r.geoms[2].body, 0);
+  EXPECT_TRUE(r.foot_bodies.empty());
+  EXPECT_FALSE(r.has_home);
 }
