@@ -23,7 +23,8 @@ import os
 from typing import Any, Mapping
 
 from . import _core
-from ._core import Config, Multibody, Simulator, Task, box2d_hooks_active, load_scenario_file, load_scenario_string
+from ._core import (Config, Multibody, RobotModel, Simulator, Task, box2d_hooks_active, load_robot_model, load_scenario_file,
+                    load_scenario_string)
 
 __all__ = [
     "Config",
@@ -34,6 +35,9 @@ __all__ = [
     "register",
     "PythonTask",
     "PythonTaskVectorEnv",
+    "Multibody",
+    "RobotModel",
+    "load_robot_model",
     "load_scenario_file",
     "load_scenario_string",
     "make_simulator",

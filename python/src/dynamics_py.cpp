@@ -9,6 +9,7 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 
+#include "dynamics_py.hpp"
 #include "kestrel/dynamics/multibody.hpp"
 
 namespace nb = nanobind;
@@ -18,14 +19,10 @@ namespace dy = kestrel::dynamics;
 
 namespace {
 
-constexpr int kPyMaxBodies = 64;
+using kestrel_py::kPyMaxBodies;
+using kestrel_py::PyMultibody;
 using Arr = nb::ndarray<const real, nb::c_contig, nb::device::cpu>;
 using Ints = nb::ndarray<const std::int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
-
-struct PyMultibody {
-  dy::MultibodyModel<kPyMaxBodies> model;
-  dy::MultibodyData<kPyMaxBodies> data;
-};
 
 void need(bool ok, const std::string& what) {
   if (!ok) throw nb::value_error(what.c_str());

@@ -358,12 +358,14 @@ nb::list registry_list(const ks::Registry<T>& r) {
 
 void bind_policy(nb::module_& m);  // policy_py.cpp
 void bind_dynamics(nb::module_& m);  // dynamics_py.cpp
+void bind_robot_model(nb::module_& m);  // robot_model_py.cpp
 
 NB_MODULE(_core, m) {
   m.doc() = "Kestrel simulation harness (sim/) from Python: scenarios, registries, tasks, the Simulator interface.";
   m.attr("real_dtype") = sizeof(real) == 4 ? "float32" : "float64";
   bind_policy(m);
   bind_dynamics(m);
+  bind_robot_model(m);
 
   m.def(
       "registries",
