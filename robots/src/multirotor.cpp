@@ -12,6 +12,8 @@ const char* robot_kind_name(RobotKind kind) {
       return "multirotor";
     case RobotKind::ground_vehicle:
       return "ground_vehicle";
+    case RobotKind::articulated:
+      return "articulated";
   }
   return "unknown";
 }

@@ -339,6 +339,20 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
     return 1;
   }
+  if (cfg.robot.kind == robots::RobotKind::articulated) {
+    // Legged robots and arms (sim/src/backends/articulated.cpp): random joint targets (run_scripted).
+    if (is_rl_task(cfg.task.name)) {
+      std::fprintf(stderr, "kestrel: %s: task %s: the RL tasks drive multirotors; an articulated robot (%s) runs with `kestrel run` and no task\n",
+                   label.c_str(), cfg.task.name.c_str(), cfg.robot.name.c_str());
+      return 1;
+    }
+    std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
+    if (!sim) {
+      std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
+      return 1;
+    }
+    return run_scripted(*sim, label, r.steps, r.out_dir, r.quiet);
+  }
   if (backend == Backend::planar) {
     if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
     std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);

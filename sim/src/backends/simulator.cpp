@@ -15,6 +15,7 @@ namespace kestrel::sim {
 
 std::unique_ptr<Simulator> make_rigid_simulator(const WorldConfig& config, std::string& error);
 std::unique_ptr<Simulator> make_planar_simulator(const WorldConfig& config, std::string& error);
+std::unique_ptr<Simulator> make_articulated_simulator(const WorldConfig& config, std::string& error);
 
 const char* backend_name(Backend b) { return b == Backend::planar ? "planar" : "rigid"; }
 
@@ -42,6 +43,14 @@ bool resolve_backend(const WorldConfig& config, Backend& out, std::string& error
 }
 
 std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, Backend backend, std::string& error) {
+  if (config.robot.kind == robots::RobotKind::articulated) {
+    if (backend == Backend::planar) {
+      error = "simulator planar: robot " + config.robot.name +
+              " is articulated (joints from a robot file); Box2D's planar world holds no joint trees; use simulator: rigid";
+      return nullptr;
+    }
+    return make_articulated_simulator(config, error);
+  }
   return backend == Backend::planar ? make_planar_simulator(config, error) : make_rigid_simulator(config, error);
 }
 

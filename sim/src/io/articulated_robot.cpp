@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -351,6 +352,12 @@ int find_body(const ArticulatedRobot& robot, const std::string& name) {
   for (std::size_t i = 0; i < robot.body_names.size(); ++i)
     if (robot.body_names[i] == name) return static_cast<int>(i);
   return -1;
+}
+
+std::string models_dir() {
+  const char* env = std::getenv("KESTREL_MODELS_DIR");
+  if (env != nullptr && env[0] != '\0') return env;
+  return KESTREL_MODELS_DIR_DEFAULT;
 }
 
 }  // namespace kestrel::sim

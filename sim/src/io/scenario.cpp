@@ -341,6 +341,13 @@ void parse_robot_map(const YAML::Node& n, RobotConfig& r, const std::string& whe
     if (!apply_urdf(resolve_path(dir, n["urdf"].Scalar()), r, err, &urdf_name)) bad(where + ".urdf", err);
     if (r.name.empty()) r.name = urdf_name.empty() ? std::string("urdf_robot") : urdf_name;
   }
+  if (n["model"]) {
+    // An articulated robot file (sim/articulated_robot.hpp), read when the simulator is built.
+    if (!n["model"].IsScalar() || n["model"].Scalar().empty()) bad(where + ".model", "expected the path of an MJCF or URDF file");
+    r.model_file = resolve_path(dir, n["model"].Scalar());
+    r.kind = robots::RobotKind::articulated;
+    if (!n["name"]) r.name = "articulated_robot";
+  }
   apply_schema(n, where, robot_schema(), r);
   if (const YAML::Node s = n["collision_shape"]) {
     const std::string f = where + ".collision_shape";

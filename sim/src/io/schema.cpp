@@ -302,9 +302,13 @@ const Schema<RobotConfig>& robot_schema() {
       vec3_f<S>("max_init_position_ratio", &S::max_init_position_ratio, "", ""),
       real_f<S>("max_init_yaw_rad", &S::max_init_yaw_rad, "rad", 0, static_cast<double>(kPi), "start yaw drawn in [-max, max]"),
       bool_f<S>("use_desaturation", &S::use_desaturation, "sequential desaturation (false: Aerial Gym's clamped pseudo-inverse)"),
+      real_f<S>("joint_kp_Nm_rad", &S::joint_kp_Nm_rad, "N m/rad", 0, 1e5, "articulated: joint PD stiffness"),
+      real_f<S>("joint_kd_Nms_rad", &S::joint_kd_Nms_rad, "N m s/rad", 0, 1e4, "articulated: joint PD damping"),
+      real_f<S>("action_scale", &S::action_scale, "rad", 0, 100, "articulated: joint target offset per unit of action"),
   };
   static const StructuralKey st[] = {
       {"urdf", "URDF file: mass, inertia, collision shape and rotors (the keys here override it)"},
+      {"model", "articulated robot file (MJCF or URDF: joints, inertias, collision primitives, `home` keyframe); makes the robot articulated"},
       {"file", "a robot file with these same keys"},
       {"collision_shape", "the robot's collision shape (section robot.collision_shape)"},
   };

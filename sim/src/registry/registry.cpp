@@ -2,6 +2,7 @@
 // Gym's env configs (empty_env, env_with_obstacles, forest_env, dynamic_env) in spirit and scale
 // (env_with_obstacles: ~45 obstacles), not in every number.
 #include "kestrel/sim/registry.hpp"
+#include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/task.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -141,6 +142,29 @@ void register_simulators(Registries& r) {
     e.assets.push_back(yard_asset("boxes", AssetKind::cube, 6, 2, 0.4_r, 0.9_r));
     return e;
   });
+  // Legged robots from the model files of models/ (read when the simulator is built), with
+  // legged_gym's joint drives: LeggedGym-Ex's Go2 (stiffness 20, damping 0.5, action scale 0.25)
+  // and legged_gym's ANYmal C (80, 2, 0.5).
+  r.robots.add("go2", "Unitree Go2 quadruped (articulated, 12 joints, 15.0 kg): models/go2/go2.xml", [] {
+    RobotConfig c;
+    c.name = "go2";
+    c.kind = robots::RobotKind::articulated;
+    c.model_file = models_dir() + "/go2/go2.xml";
+    c.joint_kp_Nm_rad = 20;
+    c.joint_kd_Nms_rad = 0.5_r;
+    c.action_scale = 0.25_r;
+    return c;
+  });
+  r.robots.add("anymal_c", "ANYbotics ANYmal C quadruped (articulated, 12 joints, 52.1 kg): models/anymal_c/anymal_c.xml", [] {
+    RobotConfig c;
+    c.name = "anymal_c";
+    c.kind = robots::RobotKind::articulated;
+    c.model_file = models_dir() + "/anymal_c/anymal_c.xml";
+    c.joint_kp_Nm_rad = 80;
+    c.joint_kd_Nms_rad = 2;
+    c.action_scale = 0.5_r;
+    return c;
+  });
   r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
     RobotConfig c;
     c.name = "ground_vehicle";
@@ -259,6 +283,16 @@ void register_builtins(Registries& r) {
     t.kind = TaskKind::hover;
     return t;
   });
+  r.tasks.add("joint_targets",
+               "articulated robots: random joint targets about the home pose (kestrel run); an episode ends on a base "
+               "contact or at its timeout",
+               [] {
+                 TaskConfig t;
+                 t.name = "joint_targets";
+                 t.kind = TaskKind::hover;
+                 t.episode_len_env_steps = 1000;  // legged_gym's 20 s at 50 Hz
+                 return t;
+               });
   register_task_builtins(r);  // navigation_task, goal_box_through_gap and its room (sim/src/tasks/)
 }
 

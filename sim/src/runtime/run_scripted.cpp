@@ -19,7 +19,7 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
               sim.backend_name(),
               sim.backend() == Backend::planar
                   ? (sim.ground_vehicle() ? "ground_vehicle" : "multirotor at fixed altitude")
-                  : "3-D",
+                  : (sim.num_dofs() > 0 ? "articulated" : "3-D"),
               sim.controller_name(), sim.action_dim(), cfg.env.name.c_str(), cfg.robot.name.c_str(), sim.robots_per_env(),
               static_cast<double>(sim.dt_s()), sim.decimation());
   rep.say("  envs %d, threads %d, seed %" PRIu64 ", steps %lld", sim.num_envs(), sim.num_threads(), cfg.seed, steps);
@@ -31,8 +31,21 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   std::vector<real> trace(static_cast<std::size_t>(trace_envs) * static_cast<std::size_t>(steps) * 3, 0);
   const bool bar = !quiet && static_cast<double>(steps) * sim.num_envs() >= 2e6;
   const auto t0 = std::chrono::steady_clock::now();
+  // Articulated robots: random joint targets, uniform in [-1, 1] actions (x robot.action_scale
+  // about the home pose), redrawn every 25 env-steps from each robot's own stream.
+  const int nd = sim.num_dofs();
+  std::vector<RngStream> target_rng;
+  for (int i = 0; nd > 0 && i < sim.num_robots(); ++i) target_rng.emplace_back(cfg.seed, static_cast<std::uint32_t>(i), kPurposeScriptedTargets);
+  if (nd > 0)
+    rep.say("  articulated: %d joints, %d feet, %d links; random joint targets every 25 env-steps\n", nd, sim.num_feet(), sim.num_links());
   for (long long s = 0; s < steps; ++s) {
-    scripted_setpoint_actions(sim, actions.data());
+    if (nd > 0) {
+      if (s % 25 == 0)
+        for (int i = 0; i < sim.num_robots(); ++i)
+          for (int j = 0; j < nd; ++j) actions[static_cast<std::size_t>(i * nd + j)] = target_rng[static_cast<std::size_t>(i)].uniform(-1, 1);
+    } else {
+      scripted_setpoint_actions(sim, actions.data());
+    }
     sim.step(actions.data());
     for (int e = 0; e < trace_envs; ++e) {
       const std::size_t i = static_cast<std::size_t>(e * sim.robots_per_env());

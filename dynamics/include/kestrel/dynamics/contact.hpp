@@ -52,6 +52,21 @@ struct ContactPoint {
   real separation_m = 0;
   real friction = 1;
   real restitution = 0;
+  // The caller's name for this contact from step to step (e.g. shape x 8 + corner; -1: none), by
+  // which a WarmStart finds its impulses of the previous step.
+  std::int32_t key = -1;
+};
+
+/// The impulses of one robot's previous step (caller storage, kept per robot between steps), by
+/// row key: PGS started from them needs a few sweeps on resting contacts, where from zero it stops
+/// at its sweep cap short of convergence and the robot creeps (a standing Go2: 0.1 mm/s at 60
+/// sweeps). Warm starting is what Box2D and Bullet do (E. Catto, "Iterative dynamics with temporal
+/// coherence", GDC 2005). Rows beyond kMaxRows start from zero.
+template <int kMaxRows>
+struct WarmStart {
+  int count = 0;
+  std::int32_t key[kMaxRows] = {};
+  real lambda[kMaxRows] = {};
 };
 
 /// Solver settings (see the file comment). Units in the names; the others are fractions.
@@ -80,6 +95,7 @@ struct ConstraintData {
   Transform X_world[kMaxBodies];
   real J[kRows][kDofs];  // constraint rows
   real Z[kRows][kDofs];  // L^-T J_i^T: half of the solve, W = Z^T D^-1 Z
+  std::int32_t key[kRows];   // the row's name between steps (WarmStart; -1: none)
   std::int16_t leaf[kRows];  // the deepest velocity coordinate row i involves (its chain up from there; -1: none)
   real W[kRows][kRows];  // Delassus matrix
   real b[kRows], target[kRows], lambda[kRows], lo[kRows], hi[kRows];
@@ -178,11 +194,11 @@ bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count
 /// gains (and D. Baraff, A. Witkin, "Large steps in cloth simulation", SIGGRAPH 1998, springs):
 /// the explicit PD of legged_gym needs kd h < 2 I on every joint, which a light calf (I ~ 0.003
 /// kg m^2) with kd = 2 at h = 5 ms breaks; this does not.
-template <int N, int C>
+template <int N, int C, int W = 1>
 [[nodiscard]] Status step_constrained(const MultibodyModel<N>& m, MultibodyData<N>& d, ConstraintData<N, C>& cd, real* q,
                                       real* qd, const real* tau, real dt_s, const ContactPoint* contacts, int num_contacts,
                                       const ConstraintParams& p = ConstraintParams(), const real* drive_kp = nullptr,
-                                      const real* drive_kd = nullptr) {
+                                      const real* drive_kd = nullptr, WarmStart<W>* warm = nullptr) {
   using CD = ConstraintData<N, C>;
   constexpr int kDofs = CD::kDofs;
   const int n = m.num_dofs;
@@ -190,11 +206,7 @@ template <int N, int C>
     return Status::invalid_argument;
   if (!detail::valid_contacts(m, contacts, num_contacts)) return Status::invalid_argument;
   if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
-  if (m.joint[0] == JointType::free) {
-    const real* qb = q + m.q_index[0] + 3;
-    if (std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) > real(1e-3))
-      return Status::non_finite_input;
-  }
+  if (!detail::base_quaternion_ok(m, q)) return Status::non_finite_input;
 
   // The unconstrained step: (H + h D) a = tau - bias, bias = rnea at zero acceleration (Coriolis,
   // centrifugal, gravity and the damping force D qd).
@@ -230,6 +242,7 @@ template <int N, int C>
     cd.kind[r] = kind;
     cd.owner[r] = static_cast<std::int16_t>(owner);
     cd.lambda[r] = 0;
+    cd.key[r] = -1;
     cd.leaf[r] = -1;
     cd.target[r] = 0;
     cd.lo[r] = 0;
@@ -250,6 +263,7 @@ template <int N, int C>
     for (int a = 0; a < 3; ++a) {
       const int r = new_row(a == 0 ? RowKind::normal : RowKind::tangent, c);
       cd.leaf[r] = static_cast<std::int16_t>(leaf);
+      if (ct.key >= 0) cd.key[r] = 3 * ct.key + a;
       for (int k = 0; k < n; ++k) cd.J[r][k] = dir[a][0] * Jp[k] + dir[a][1] * Jp[kDofs + k] + dir[a][2] * Jp[2 * kDofs + k];
     }
     const int rn = rows - 3;
@@ -272,6 +286,7 @@ template <int N, int C>
         if (gap[side] > p.limit_margin + dt_s * std::max(toward[side], real(0))) continue;
         const int r = new_row(RowKind::limit, k);
         cd.leaf[r] = static_cast<std::int16_t>(k);
+        cd.key[r] = -(2 + 3 * k + side);  // joint rows: negative keys below -1
         cd.J[r][k] = side == 0 ? real(1) : real(-1);
         cd.target[r] = gap[side] > 0 ? -gap[side] / dt_s : p.baumgarte * -gap[side] / dt_s;
       }
@@ -279,6 +294,7 @@ template <int N, int C>
     if (m.friction_loss[i] > 0) {
       const int r = new_row(RowKind::joint_friction, k);
       cd.leaf[r] = static_cast<std::int16_t>(k);
+      cd.key[r] = -(4 + 3 * k);
       cd.J[r][k] = 1;
       cd.lo[r] = -m.friction_loss[i] * dt_s;
       cd.hi[r] = m.friction_loss[i] * dt_s;
@@ -312,6 +328,32 @@ template <int N, int C>
     for (int c = 0; c < rows; ++c) v += cd.W[r][c] * cd.lambda[c];
     return v;
   };
+  if (warm != nullptr) {
+    // Start from the previous step's impulses of the same rows (looked up by key; most rows keep
+    // their index, which is tried first), clamped to this step's bounds.
+    for (int r = 0; r < rows; ++r) {
+      if (cd.key[r] == -1) continue;
+      int found = -1;
+      if (r < warm->count && warm->key[r] == cd.key[r]) found = r;
+      for (int k = 0; found < 0 && k < warm->count; ++k)
+        if (warm->key[k] == cd.key[r]) found = k;
+      if (found < 0) continue;
+      real l = warm->lambda[found];
+      if (cd.kind[r] == RowKind::normal) l = std::max(l, real(0));
+      if (cd.kind[r] == RowKind::limit || cd.kind[r] == RowKind::joint_friction) l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
+      cd.lambda[r] = l;
+    }
+    for (int r = 0; r < num_contacts; ++r) {  // friction within the cone of the warm normal impulse
+      const int rn = 3 * r;
+      const real lim = contacts[r].friction * cd.lambda[rn];
+      const real mag = std::sqrt(cd.lambda[rn + 1] * cd.lambda[rn + 1] + cd.lambda[rn + 2] * cd.lambda[rn + 2]);
+      if (mag > lim) {
+        const real s = mag > 0 ? lim / mag : real(0);
+        cd.lambda[rn + 1] *= s;
+        cd.lambda[rn + 2] *= s;
+      }
+    }
+  }
   int sweep = 0;
   for (; sweep < p.iterations && rows > 0; ++sweep) {
     real change = 0;
@@ -355,6 +397,13 @@ template <int N, int C>
     }
   }
   cd.iterations_used = sweep;
+  if (warm != nullptr) {
+    warm->count = rows < W ? rows : W;
+    for (int r = 0; r < warm->count; ++r) {
+      warm->key[r] = cd.key[r];
+      warm->lambda[r] = cd.lambda[r];
+    }
+  }
 
   // v = v* + Y^T lambda, then the positions with it.
   real v_new[kDofs] = {};
@@ -416,9 +465,11 @@ struct HalfSpace {
 /// most `capacity` contacts and returns how many were found (more than capacity: the caller's
 /// capacity is too small; the first `capacity` are written).
 inline int collide_halfspace(const CollisionShape* shapes, int num_shapes, const Transform* X_world, const HalfSpace& g,
-                             real margin_m, ContactPoint* out, int capacity) {
+                             real margin_m, ContactPoint* out, int capacity, int first_shape_key = 0) {
   int found = 0;
+  int shape = 0, point = 0;  // the contact's key: (first_shape_key + shape) x 8 + point
   auto add = [&](int body, const Vec3& point_w, real gap, const CollisionShape& s) {
+    const int this_point = point++;
     if (!(gap < margin_m)) return;
     if (found < capacity) {
       ContactPoint& c = out[found];
@@ -428,11 +479,14 @@ inline int collide_halfspace(const CollisionShape* shapes, int num_shapes, const
       c.separation_m = gap;
       c.friction = real(0.5) * (s.friction + g.friction);
       c.restitution = real(0.5) * (s.restitution + g.restitution);
+      c.key = (first_shape_key + shape) * 8 + this_point;
     }
     ++found;
   };
   for (int i = 0; i < num_shapes; ++i) {
     const CollisionShape& s = shapes[i];
+    shape = i;
+    point = 0;
     const Transform& X = X_world[s.body];
     const Mat3 R_w = X.E.transpose() * s.R_b;  // shape -> world
     const Vec3 c_w = X.r + X.E.transpose() * s.p_b;

@@ -238,6 +238,18 @@ inline Mat6 to_parent(const Transform& X, const Mat6& I) {
 }
 }  // namespace detail
 
+namespace detail {
+/// A floating base's quaternion within 1e-3 of unit length (true without a floating base). Out of
+/// line: inlined into a caller whose q holds one fixed-base coordinate, GCC's -Warray-bounds cannot
+/// see that the free joint's branch is dead and flags q[1..3].
+template <int N>
+__attribute__((noinline)) bool base_quaternion_ok(const MultibodyModel<N>& m, const real* q) {
+  if (m.joint[0] != JointType::free) return true;
+  const real* qb = q + m.q_index[0] + 3;
+  return std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) <= real(1e-3);
+}
+}  // namespace detail
+
 /// Inverse dynamics: the joint forces (N m, N) tau[num_dofs] that give the accelerations qdd at
 /// (q, qd) under gravity, with an optional external force per body (f_ext[i], body frame, RBDA's
 /// [n; f]; nullptr: none). With a floating base, tau's first six entries are the wrench the base
@@ -317,11 +329,7 @@ template <int N>
                          real* qdd, const Vec6* f_ext = nullptr, real implicit_damping_dt = 0) {
   const int n = m.num_dofs;
   if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
-  if (m.joint[0] == JointType::free) {
-    const real* qb = q + m.q_index[0] + 3;
-    if (std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) > real(1e-3))
-      return Status::non_finite_input;
-  }
+  if (!detail::base_quaternion_ok(m, q)) return Status::non_finite_input;
   detail::update_kinematics(m, d, q);
   // Pass 1, base to tips: velocities, velocity-product accelerations, bias forces.
   for (int i = 0; i < m.num_bodies; ++i) {

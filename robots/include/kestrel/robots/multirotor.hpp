@@ -38,9 +38,10 @@ namespace kestrel::robots {
 enum class RobotKind : std::uint8_t {
   multirotor = 0,      // rotors through an allocator (quadrotor, hexarotor, octarotor, ROV)
   ground_vehicle = 1,  // car-like, velocity + steering angle (controllers/velocity_steering.hpp)
+  articulated = 2,     // a tree of jointed bodies from a robot file (dynamics/), joint PD targets
 };
-constexpr std::size_t kNumRobotKinds = 2;
-/// "multirotor" / "ground_vehicle" ("unknown" outside the enum).
+constexpr std::size_t kNumRobotKinds = 3;
+/// "multirotor" / "ground_vehicle" / "articulated" ("unknown" outside the enum).
 const char* robot_kind_name(RobotKind kind);
 /// False (kind untouched) for any other name.
 [[nodiscard]] bool robot_kind_from_name(const char* name, RobotKind& kind);

@@ -84,6 +84,10 @@ struct ArticulatedRobot {
 /// the file, the element and the problem; `out` is untouched then.
 [[nodiscard]] bool load_robot_model(const std::string& path, ArticulatedRobot& out, std::string& error);
 
+/// The folder of Kestrel's robot files (models/ of the source tree, where the registry's `go2` and
+/// `anymal_c` point): the KESTREL_MODELS_DIR environment variable if set, else the source tree's.
+std::string models_dir();
+
 /// The body index of `name`, -1 if none.
 int find_body(const ArticulatedRobot& robot, const std::string& name);
 

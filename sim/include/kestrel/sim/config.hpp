@@ -171,6 +171,13 @@ struct RobotConfig {
   real max_init_yaw_rad = kPi;
   bool use_desaturation = true;  // sequential desaturation; false: Aerial Gym's clamped pinv
   std::vector<SensorConfig> sensors;  // none by default: the default run renders nothing
+  // kind articulated: the robot file (MJCF or URDF, sim/articulated_robot.hpp) and its joint drive,
+  // legged_gym's P mode: tau = joint_kp (action_scale a + q_home - q) - joint_kd qd, clipped at the
+  // file's effort limits, recomputed every physics step (the home pose is the file's `home` keyframe).
+  std::string model_file;
+  real joint_kp_Nm_rad = 20;      // legged_gym's Go2 stiffness
+  real joint_kd_Nms_rad = 0.5_r;  // and damping
+  real action_scale = 0.25_r;     // rad per unit of action
 };
 
 /// Controller config: registry name -> kind, and the Lee family's parameters (LeeParams: gain

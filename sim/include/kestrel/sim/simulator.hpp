@@ -78,6 +78,8 @@ struct ObstacleBox {
 
 /// Random stream purpose of push_robots (above kPurposeUser, see kernel/rng.hpp).
 constexpr std::uint32_t kPurposePush = kPurposeUser + 5;
+/// Random stream purpose of run_scripted's joint targets for articulated robots.
+constexpr std::uint32_t kPurposeScriptedTargets = kPurposeUser + 6;
 
 class Simulator {
  public:
@@ -159,6 +161,25 @@ class Simulator {
   const real* motor_constant_scale() const { return fresh(kLazyScales, motor_scale_); }
   /// Active controller gains / nominal gains (Lee: mean over the 12 gain components).
   const real* controller_gain_scale() const { return fresh(kLazyScales, gain_scale_); }
+
+  // Articulated robots (robot kind articulated, rigid backend; 0 and empty otherwise): legged_gym's
+  // joint and link views. Joints are the robot file's actuated joints in body order.
+  int num_dofs() const { return num_dofs_; }    // actuated joints per robot
+  int num_feet() const { return num_feet_; }    // foot bodies per robot
+  int num_links() const { return num_links_; }  // bodies per robot
+  const real* dof_pos() const { return dof_pos_.data(); }    // (robots x dofs) rad or m
+  const real* dof_vel() const { return dof_vel_.data(); }    // (robots x dofs) rad/s or m/s
+  const real* torques() const { return torques_.data(); }    // (robots x dofs) N m or N: the last physics step's
+  const real* feet_pos_w() const { return feet_pos_w_.data(); }  // (robots x feet x 3) m
+  /// (robots x links x 3) N: the ground's force on each body at the last physics step.
+  const real* link_contact_forces_w() const { return link_forces_w_.data(); }
+  /// legged_gym's reset_dofs: for each listed env, robots_per_env rows of dof_pos and dof_vel
+  /// (num_dofs each). False (nothing written, last_error() says why) off articulated robots, for
+  /// a bad env id or a non-finite value.
+  [[nodiscard]] virtual bool reset_dofs(const int* env_ids, int count, const real* dof_pos, const real* dof_vel) {
+    (void)env_ids, (void)count, (void)dof_pos, (void)dof_vel;
+    return fail(std::string("simulator ") + backend_name() + ": reset_dofs: the robot has no joints (robot kind articulated only)");
+  }
 
   /// 2-D lidar (planar; 0 beams on rigid, whose ray sensors are the World's, rigid_world(sim)->sensor_*).
   int lidar_beams() const { return lidar_beams_; }
@@ -251,6 +272,8 @@ class Simulator {
   mutable std::vector<real> motor_scale_, gain_scale_;
   mutable std::uint8_t lazy_ = 0;
   std::vector<real> lidar_;
+  int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0;
+  std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_;
   std::vector<RngStream> rng_push_;
   std::string error_;
 };

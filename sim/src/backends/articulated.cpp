@@ -1,0 +1,481 @@
+// Articulated robots (robot kind articulated) behind the Simulator interface, on the rigid
+// backend: a robot file (sim/articulated_robot.hpp: MJCF or URDF through MuJoCo's compiler) as the
+// core's kinematic tree, stepped by the core's constrained step (dynamics/contact.hpp: contacts
+// with friction against the terrain, joint limits, joint dry friction) under legged_gym's joint PD.
+//
+// One physics step of an environment (legged_gym's LeggedRobot.step, per physics step):
+//   tau = clip(kp (action_scale a + q_home - q) - kd qd, +-effort)      (recomputed every physics step)
+//   contacts: each collision primitive of the robot (spheres, capsules as their two end spheres,
+//     boxes as their corners) against the terrain's local plane under it (Terrain::height_at and
+//     its slope by central differences: a plane, a height field or a mesh alike)
+//   step_constrained with the drives' kp and kd taken implicitly where the torque is not clipped
+//     (legged_gym's explicit PD diverges on Go2's calf at dt = 5 ms otherwise; see contact.hpp).
+// Episodes end on a base contact (legged_gym's termination_contact_names = base) when
+// env.reset_on_collision, and on timeout (task.episode_len_env_steps); auto-reset puts the robot
+// back at its `home` keyframe over its environment's origin. Environment origins lie on a square
+// grid 3 m apart (legged_gym's env_spacing), centred on the terrain.
+//
+// Determinism: environments never read each other; each worker has its own scratch (dynamics data
+// and the constraint solver's arrays), so the results are bit-identical for any thread count. No
+// heap inside a step: every array is sized at set-up.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "kestrel/dynamics/contact.hpp"
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/articulated_robot.hpp"
+#include "kestrel/sim/simulator.hpp"
+#include "kestrel/sim/terrain.hpp"
+#include "kestrel/sim/thread_pool.hpp"
+
+namespace kestrel::sim {
+
+namespace dy = kestrel::dynamics;
+
+namespace {
+
+constexpr int kMaxContacts = 32;  // per robot per physics step
+using Scratch = dy::ConstraintData<kMaxRobotBodies, kMaxContacts>;
+constexpr real kEnvSpacing_m = 3;          // legged_gym's env_spacing
+constexpr real kContactMargin_m = 0.01_r;  // speculative contacts (contact.hpp)
+constexpr real kActionClip = 100;          // legged_gym's clip_actions
+constexpr real kBaseContactThreshold_N = 1;
+constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
+
+struct Worker {
+  dy::MultibodyData<kMaxRobotBodies> data;
+  Scratch scratch;
+  dy::ContactPoint contacts[kMaxContacts];
+};
+
+class ArticulatedSimulator final : public Simulator {
+ public:
+  ArticulatedSimulator() : Simulator(Backend::rigid) {}
+
+  bool init(const WorldConfig& c, std::string& error) {
+    const std::string pre = "simulator rigid, robot " + c.robot.name + ": ";
+    if (c.robot.model_file.empty()) {
+      error = pre + "robot.model: an articulated robot needs a robot file (MJCF or URDF)";
+      return false;
+    }
+    if (c.robot.robots_per_env != 1) {
+      error = pre + "robot.robots_per_env: articulated robots run one per environment (got " + std::to_string(c.robot.robots_per_env) + ")";
+      return false;
+    }
+    if (!c.env.assets.empty()) {
+      error = pre + "env: articulated robots collide with the terrain only; use an environment without obstacles (e.g. env: empty)";
+      return false;
+    }
+    if (!c.robot.sensors.empty()) {
+      error = pre + "robot.sensors: articulated robots carry no sensors yet; remove `sensors`";
+      return false;
+    }
+    if (!load_robot_model(c.robot.model_file, robot_, error)) return false;
+    const RobotMultibody& m = robot_.multibody;
+    if (!robot_.has_home) {
+      error = pre + c.robot.model_file + ": no keyframe named \"home\" (the joint PD's default pose)";
+      return false;
+    }
+    floating_ = m.joint[0] == dy::JointType::free;
+    for (int b = 0; b < m.num_bodies; ++b) {
+      if (m.dof_index[b] < 0 || m.joint[b] == dy::JointType::free) continue;
+      dof_v_.push_back(m.dof_index[b]);
+      dof_q_.push_back(m.q_index[b]);
+      effort_.push_back(m.effort_limit[b]);
+      home_.push_back(robot_.home_q[static_cast<std::size_t>(m.q_index[b])]);
+    }
+    if (dof_v_.empty()) {
+      error = pre + c.robot.model_file + ": the robot has no revolute or prismatic joint to drive";
+      return false;
+    }
+    for (const RobotGeom& g : robot_.geoms) {
+      if (g.body < 0) continue;  // world geometry of the file: the terrain stands for the ground
+      dy::CollisionShape s;
+      s.body = g.body;
+      s.p_b = g.pos_b;
+      s.R_b = rotation_matrix(quat_from_xyzw(g.quat_xyzw_b));
+      s.friction = g.friction;
+      switch (g.type) {
+        case RobotGeomType::sphere:
+          s.type = dy::ShapeType::sphere;
+          s.size = Vec3(g.size[0], 0, 0);
+          break;
+        case RobotGeomType::capsule:
+          s.type = dy::ShapeType::capsule;
+          s.size = Vec3(g.size[0], g.size[1], 0);
+          break;
+        case RobotGeomType::box:
+          s.type = dy::ShapeType::box;
+          s.size = g.size;
+          break;
+        case RobotGeomType::cylinder:  // its two end discs' rims, approximated by end spheres
+          s.type = dy::ShapeType::capsule;
+          s.size = Vec3(g.size[0], g.size[1], 0);
+          break;
+        case RobotGeomType::ellipsoid:  // its bounding box's corners
+          s.type = dy::ShapeType::box;
+          s.size = g.size;
+          break;
+        case RobotGeomType::plane:
+          error = pre + c.robot.model_file + ": a plane geom on a moving body (" + robot_.body_names[static_cast<std::size_t>(g.body)] +
+                  ") cannot collide with the terrain";
+          return false;
+      }
+      shapes_.push_back(s);
+    }
+    if (!Terrain::build(c.env.terrain, c.seed, terrain_, error)) return false;
+
+    if (const char* it = std::getenv("ART_ITERS")) params_.iterations = std::atoi(it);
+    allocate_views(c, static_cast<int>(dof_v_.size()), 0);
+    num_dofs_ = static_cast<int>(dof_v_.size());
+    num_feet_ = static_cast<int>(robot_.foot_bodies.size());
+    num_links_ = m.num_bodies;
+    const std::size_t n = static_cast<std::size_t>(num_robots());
+    dof_pos_.assign(n * dof_v_.size(), 0);
+    dof_vel_.assign(n * dof_v_.size(), 0);
+    torques_.assign(n * dof_v_.size(), 0);
+    feet_pos_w_.assign(n * robot_.foot_bodies.size() * 3, 0);
+    link_forces_w_.assign(n * static_cast<std::size_t>(m.num_bodies) * 3, 0);
+    nq_ = m.num_q;
+    nv_ = m.num_dofs;
+    q_.assign(n * static_cast<std::size_t>(nq_), 0);
+    qd_.assign(n * static_cast<std::size_t>(nv_), 0);
+    episode_step_.assign(static_cast<std::size_t>(num_envs_), 0);
+    warm_.assign(static_cast<std::size_t>(num_envs_), dy::WarmStart<kWarmRows>{});
+    stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
+    step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
+    origins_.resize(static_cast<std::size_t>(num_envs_));
+    place_origins();
+    const int threads = std::max(1, std::min(c.num_threads, num_envs_));
+    pool_ = std::make_unique<ThreadPool>(threads);
+    for (int w = 0; w < threads; ++w) workers_.push_back(std::make_unique<Worker>());
+    for (int e = 0; e < num_envs_; ++e) reset_env(e, false);
+    for (int e = 0; e < num_envs_; ++e) refresh(e, *workers_[0]);
+    return true;
+  }
+
+  int num_threads() const override { return pool_->size(); }
+  const char* controller_name() const override { return "joint_pd"; }
+
+  void post_physics_step() override {
+    for (int e = 0; e < num_envs_; ++e) {
+      const std::size_t ei = static_cast<std::size_t>(e);
+      EnvStats& st = stats_[ei];
+      ++st.env_steps;
+      ++episode_step_[ei];
+      const bool crash = crashed_[ei] != 0;
+      if (crash) ++st.crashes;
+      const bool timeout = episode_step_[ei] >= cfg_.task.episode_len_env_steps;
+      const bool ended = (crash && cfg_.env.reset_on_collision) || timeout;
+      reset_buf_[ei] = ended ? 1 : 0;
+      if (!ended) continue;
+      ++st.episodes_done;
+      if (timeout && !(crash && cfg_.env.reset_on_collision)) ++st.timeouts;
+      if (auto_reset_) {
+        reset_env(e, true);
+        refresh(e, *workers_[0]);
+      }
+    }
+  }
+
+  void reset_idx(const int* env_ids, int count) override {
+    for (int k = 0; k < count; ++k) {
+      if (env_ids[k] < 0 || env_ids[k] >= num_envs_) continue;
+      reset_env(env_ids[k], true);
+      refresh(env_ids[k], *workers_[0]);
+    }
+  }
+
+  bool reset_dofs(const int* env_ids, int count, const real* dof_pos, const real* dof_vel) override {
+    const std::string pre = "simulator rigid: reset_dofs: ";
+    const int nd = num_dofs_;
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] < 0 || env_ids[k] >= num_envs_)
+        return fail(pre + "env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")");
+    if (!all_finite(dof_pos, count * nd) || !all_finite(dof_vel, count * nd)) return fail(pre + "non-finite dof_pos or dof_vel");
+    for (int k = 0; k < count; ++k) {
+      const std::size_t e = static_cast<std::size_t>(env_ids[k]);
+      for (int j = 0; j < nd; ++j) {
+        q_[e * static_cast<std::size_t>(nq_) + static_cast<std::size_t>(dof_q_[static_cast<std::size_t>(j)])] = dof_pos[k * nd + j];
+        qd_[e * static_cast<std::size_t>(nv_) + static_cast<std::size_t>(dof_v_[static_cast<std::size_t>(j)])] = dof_vel[k * nd + j];
+      }
+      refresh(env_ids[k], *workers_[0]);
+    }
+    return true;
+  }
+
+  void update_sensors() override {}
+  void set_auto_reset(bool on) override { auto_reset_ = on; }
+  void set_curriculum_level(real level) override {
+    if (is_finite(level)) curriculum_level_ = clamp(level, 0_r, 1_r);
+  }
+  void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const override {
+    const Vec3& o = origins_[static_cast<std::size_t>(env)];
+    lower_w = o - Vec3(kEnvSpacing_m / 2, kEnvSpacing_m / 2, 1);
+    upper_w = o + Vec3(kEnvSpacing_m / 2, kEnvSpacing_m / 2, 2);
+  }
+  RangeImage range_image(int robot, int k) const override {
+    (void)robot, (void)k;
+    return RangeImage{};
+  }
+  bool set_obstacle_boxes(int env, const ObstacleBox* boxes, int count) override {
+    (void)env, (void)boxes, (void)count;
+    return fail("simulator rigid: set_obstacle_boxes: articulated robots have no obstacle slots (they collide with the terrain only)");
+  }
+
+  WorldSummary summary() const override {
+    WorldSummary s;
+    for (const EnvStats& e : stats_) add_env_counters(s, e);
+    for (std::uint64_t k : step_errors_) s.reset_errors += k;
+    return s;
+  }
+  bool placement_fallback(int env) const override {
+    (void)env;
+    return false;
+  }
+  std::uint64_t state_hash() const override {
+    // FNV-1a over every environment's configuration and velocities, in environment order.
+    std::uint64_t h = 1469598103934665603ull;
+    auto mix = [&h](const void* p, std::size_t bytes) {
+      const unsigned char* b = static_cast<const unsigned char*>(p);
+      for (std::size_t i = 0; i < bytes; ++i) {
+        h ^= b[i];
+        h *= 1099511628211ull;
+      }
+    };
+    mix(q_.data(), q_.size() * sizeof(real));
+    mix(qd_.data(), qd_.size() * sizeof(real));
+    return h;
+  }
+
+  /// The per-physics-step work of one environment (workers run slices of environments).
+  void physics_step(int e, Worker& w) {
+    const RobotMultibody& m = robot_.multibody;
+    const std::size_t ei = static_cast<std::size_t>(e);
+    real* q = &q_[ei * static_cast<std::size_t>(nq_)];
+    real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
+    const real* a = &actions_[ei * static_cast<std::size_t>(action_dim_)];
+    real tau[dy::max_dofs<kMaxRobotBodies>()] = {}, kp[dy::max_dofs<kMaxRobotBodies>()] = {},
+         kd[dy::max_dofs<kMaxRobotBodies>()] = {};
+    const real gain_p = cfg_.robot.joint_kp_Nm_rad, gain_d = cfg_.robot.joint_kd_Nms_rad;
+    for (std::size_t j = 0; j < dof_v_.size(); ++j) {
+      const int k = dof_v_[j];
+      const real act = is_finite(a[j]) ? clamp(a[j], -kActionClip, kActionClip) : 0_r;
+      const real target = home_[j] + cfg_.robot.action_scale * act;
+      real t = gain_p * (target - q[dof_q_[j]]) - gain_d * qd[k];
+      if (effort_[j] > 0 && std::fabs(t) > effort_[j]) {
+        t = std::copysign(effort_[j], t);  // saturated: the drive's gains do not act, so none implicit
+      } else {
+        kp[k] = gain_p;
+        kd[k] = gain_d;
+      }
+      tau[k] = t;
+      torques_[ei * dof_v_.size() + j] = t;
+    }
+    dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
+    int found = 0;
+    for (std::size_t si = 0; si < shapes_.size(); ++si) {
+      const dy::CollisionShape& s = shapes_[si];
+      // The terrain's local plane under the shape's centre.
+      const dy::Transform& X = w.scratch.X_world[s.body];
+      const Vec3 c = X.r + X.E.transpose() * s.p_b;
+      dy::HalfSpace ground;
+      terrain_plane(c[0], c[1], ground);
+      const int room = kMaxContacts - found;
+      if (room <= 0) break;
+      const int k = dy::collide_halfspace(&s, 1, w.scratch.X_world, ground, kContactMargin_m, w.contacts + found, room,
+                                          static_cast<int>(si));
+      found += std::min(k, room);
+    }
+    const Status st = dy::step_constrained(m, w.data, w.scratch, q, qd, tau, cfg_.sim.dt_s, w.contacts, found,
+                                           params_, kp, kd, &warm_[ei]);
+    real* lf = &link_forces_w_[ei * static_cast<std::size_t>(m.num_bodies) * 3];
+    for (int b = 0; b < 3 * m.num_bodies; ++b) lf[b] = 0;
+    if (st != Status::ok) {
+      ++step_errors_[ei];  // refused: the state is held (the core's contract)
+      return;
+    }
+    for (int k = 0; k < found; ++k)
+      for (int c = 0; c < 3; ++c) lf[3 * w.contacts[k].body + c] += w.scratch.contact_force_w[k][c];
+  }
+
+  /// The views of environment e from its state (and its feet by forward kinematics).
+  void refresh(int e, Worker& w) {
+    const RobotMultibody& m = robot_.multibody;
+    const std::size_t ei = static_cast<std::size_t>(e);
+    const real* q = &q_[ei * static_cast<std::size_t>(nq_)];
+    const real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
+    dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
+    RigidBodyState s;
+    const dy::Transform& X0 = w.scratch.X_world[0];
+    s.position_w = X0.r;
+    s.orientation_wb = quat_from_rotation_matrix(X0.E.transpose());
+    if (floating_) {
+      s.orientation_wb = quat_from_xyzw(q + 3);
+      s.linvel_w = rotate(s.orientation_wb, Vec3(qd[0], qd[1], qd[2]));
+      s.angvel_b = Vec3(qd[3], qd[4], qd[5]);
+    } else {
+      s.linvel_w = Vec3::Zero();
+      s.angvel_b = Vec3::Zero();
+    }
+    write_state_view(ei, s);
+    for (std::size_t j = 0; j < dof_v_.size(); ++j) {
+      dof_pos_[ei * dof_v_.size() + j] = q[dof_q_[j]];
+      dof_vel_[ei * dof_v_.size() + j] = qd[dof_v_[j]];
+    }
+    for (std::size_t f = 0; f < robot_.foot_bodies.size(); ++f) {
+      const dy::Transform& X = w.scratch.X_world[robot_.foot_bodies[f]];
+      for (int c = 0; c < 3; ++c) feet_pos_w_[(ei * robot_.foot_bodies.size() + f) * 3 + c] = X.r[c];
+    }
+    const real* lf = &link_forces_w_[ei * static_cast<std::size_t>(m.num_bodies) * 3];
+    Vec3 total = Vec3::Zero();
+    for (int b = 0; b < m.num_bodies; ++b) total += Vec3(lf[3 * b], lf[3 * b + 1], lf[3 * b + 2]);
+    for (int c = 0; c < 3; ++c) contact_w_[3 * ei + c] = total[c];
+    crashed_[ei] = Vec3(lf[0], lf[1], lf[2]).norm() > kBaseContactThreshold_N ? 1 : 0;
+    for (int c = 0; c < 3; ++c) target_w_[3 * ei + c] = origins_[ei][c];
+  }
+
+ protected:
+  void advance() override {
+    pool_->run(&ArticulatedSimulator::run_slice, this);
+  }
+
+  bool set_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
+                       const real* ang_vel_w) override {
+    if (!floating_) return fail("simulator rigid: reset_root_states: the robot's base is fixed to the world (no free joint)");
+    for (int k = 0; k < count; ++k) {
+      const std::size_t e = static_cast<std::size_t>(env_ids[k]);
+      real* q = &q_[e * static_cast<std::size_t>(nq_)];
+      real* qd = &qd_[e * static_cast<std::size_t>(nv_)];
+      for (int c = 0; c < 3; ++c) q[c] = pos_w[3 * k + c];
+      const Quat Q = quat_from_xyzw(quat_xyzw + 4 * k).normalized();
+      const Vec4 qn = to_xyzw(Q);
+      for (int c = 0; c < 4; ++c) q[3 + c] = qn[c];
+      const Vec3 vb = rotate_inverse(Q, Vec3(lin_vel_w[3 * k], lin_vel_w[3 * k + 1], lin_vel_w[3 * k + 2]));
+      const Vec3 wb = rotate_inverse(Q, Vec3(ang_vel_w[3 * k], ang_vel_w[3 * k + 1], ang_vel_w[3 * k + 2]));
+      for (int c = 0; c < 3; ++c) {
+        qd[c] = vb[c];
+        qd[3 + c] = wb[c];
+      }
+      refresh(env_ids[k], *workers_[0]);
+    }
+    return true;
+  }
+
+  void set_velocity_xy(int env, int robot, real vx_w, real vy_w) override {
+    (void)robot;
+    if (!floating_) return;
+    const std::size_t e = static_cast<std::size_t>(env);
+    const real* q = &q_[e * static_cast<std::size_t>(nq_)];
+    real* qd = &qd_[e * static_cast<std::size_t>(nv_)];
+    const Quat Q = quat_from_xyzw(q + 3);
+    Vec3 vw = rotate(Q, Vec3(qd[0], qd[1], qd[2]));
+    vw[0] = vx_w;
+    vw[1] = vy_w;
+    const Vec3 vb = rotate_inverse(Q, vw);
+    for (int c = 0; c < 3; ++c) qd[c] = vb[c];
+    refresh(env, *workers_[0]);
+  }
+
+ private:
+  static void run_slice(void* self_v, int worker) {
+    auto* self = static_cast<ArticulatedSimulator*>(self_v);
+    const int threads = self->pool_->size();
+    // A static partition into contiguous slices; each environment's result depends on it alone.
+    const int begin = static_cast<int>(static_cast<long long>(self->num_envs_) * worker / threads);
+    const int end = static_cast<int>(static_cast<long long>(self->num_envs_) * (worker + 1) / threads);
+    Worker& w = *self->workers_[static_cast<std::size_t>(worker)];
+    for (int e = begin; e < end; ++e) {
+      for (int s = 0; s < self->decimation_; ++s) self->physics_step(e, w);
+      self->refresh(e, w);
+    }
+  }
+
+  /// Height and unit normal of the terrain at (x, y): its local plane as a half-space.
+  void terrain_plane(real x, real y, dy::HalfSpace& g) const {
+    const real h = terrain_->height_at(x, y);
+    Vec3 n(0, 0, 1);
+    if (terrain_->type() != TerrainType::plane) {
+      const real d = terrain_->type() == TerrainType::heightfield ? terrain_->spacing_m() / 2 : 0.02_r;
+      const real dhdx = (terrain_->height_at(x + d, y) - terrain_->height_at(x - d, y)) / (2 * d);
+      const real dhdy = (terrain_->height_at(x, y + d) - terrain_->height_at(x, y - d)) / (2 * d);
+      n = Vec3(-dhdx, -dhdy, 1);
+      n /= n.norm();
+    }
+    g.normal_w = n;
+    g.offset_m = n.dot(Vec3(x, y, h));
+    g.friction = 1;  // legged_gym's ground static friction
+    g.restitution = 0;
+  }
+
+  void place_origins() {
+    // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin).
+    const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(num_envs_)))));
+    Vec3 centre = Vec3::Zero();
+    if (terrain_->type() == TerrainType::heightfield)
+      centre = terrain_->corner_w() + Vec3(terrain_->spacing_m() * static_cast<real>(terrain_->nx() - 1) / 2,
+                                           terrain_->spacing_m() * static_cast<real>(terrain_->ny() - 1) / 2, 0);
+    for (int e = 0; e < num_envs_; ++e) {
+      const real x = (static_cast<real>(e % cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      const real y = (static_cast<real>(e / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      Vec3 o(centre[0] + x, centre[1] + y, 0);
+      o[2] = terrain_->height_at(o[0], o[1]);
+      origins_[static_cast<std::size_t>(e)] = o;
+    }
+  }
+
+  /// The robot at its home keyframe over env's origin (the keyframe's base height above the
+  /// terrain there), at rest.
+  void reset_env(int e, bool count) {
+    const std::size_t ei = static_cast<std::size_t>(e);
+    real* q = &q_[ei * static_cast<std::size_t>(nq_)];
+    real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
+    for (int k = 0; k < nq_; ++k) q[k] = robot_.home_q[static_cast<std::size_t>(k)];
+    for (int k = 0; k < nv_; ++k) qd[k] = 0;
+    if (floating_) {
+      q[0] += origins_[ei][0];
+      q[1] += origins_[ei][1];
+      q[2] += origins_[ei][2];
+    }
+    episode_step_[ei] = 0;
+    warm_[ei].count = 0;
+    std::fill(link_forces_w_.begin() + static_cast<long>(ei * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3),
+              link_forces_w_.begin() + static_cast<long>((ei + 1) * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3), 0_r);
+    std::fill(torques_.begin() + static_cast<long>(ei * dof_v_.size()), torques_.begin() + static_cast<long>((ei + 1) * dof_v_.size()), 0_r);
+    EnvStats& st = stats_[ei];
+    ++st.placements;
+    if (count) ++st.resets;
+  }
+
+  ArticulatedRobot robot_;
+  bool floating_ = false;
+  std::vector<int> dof_v_, dof_q_;  // per actuated joint: its velocity and configuration coordinate
+  std::vector<real> effort_, home_;
+  std::vector<dy::CollisionShape> shapes_;
+  std::unique_ptr<Terrain> terrain_;
+  std::vector<Vec3> origins_;
+  int nq_ = 0, nv_ = 0;
+  std::vector<real> q_, qd_;  // (envs x nq), (envs x nv)
+  std::vector<int> episode_step_;
+  std::vector<EnvStats> stats_;
+  std::vector<std::uint64_t> step_errors_;
+  std::unique_ptr<ThreadPool> pool_;
+  std::vector<std::unique_ptr<Worker>> workers_;
+  bool auto_reset_ = true;
+  real curriculum_level_ = 1;
+  dy::ConstraintParams params_;
+  std::vector<dy::WarmStart<kWarmRows>> warm_;  // (envs)
+};
+
+}  // namespace
+
+std::unique_ptr<Simulator> make_articulated_simulator(const WorldConfig& config, std::string& error) {
+  auto sim = std::make_unique<ArticulatedSimulator>();
+  if (!sim->init(config, error)) return nullptr;
+  return sim;
+}
+
+}  // namespace kestrel::sim
