@@ -75,19 +75,34 @@ struct Case {
   double kp, kd;
 };
 
+// One simulator's figures for one robot.
+struct SimFigures {
+  double ns = 1e300;  // best rep, ns per physics step
+  // Means over the last 0.2 s of the settling:
+  double height = 0;    // base z (m)
+  double fn = 0;        // contact normal forces summed (N)
+  double iters = 0;     // Kestrel: PGS sweeps (cd.iterations_used); MuJoCo: d->solver_iter
+  int iters_max = 0;
+  double contacts = 0;  // Kestrel: contact points from collide_halfspace; MuJoCo: d->ncon
+  double rows = 0;      // constraint rows (Kestrel: cd.num_rows; MuJoCo: d->nefc)
+  double settle_drift = 0;  // base x-y distance moved during the settling (m)
+  double rep_drift = 0;     // ... during the first timed rep (m)
+  double rep_dz = 0;        // base height change during the first timed rep (m)
+};
+
+// MuJoCo's solver settings per row: the file's own (MuJoCo's defaults: pyramidal cone, impratio
+// 1) and those of the MuJoCo Menagerie's Go2 (elliptic cone, impratio 100: "increased impratio to
+// reduce slippage"; Kestrel's cone is isotropic, as an elliptic one).
+constexpr int kMujocoConfigs = 2;
+const char* const kMujocoConfigName[kMujocoConfigs] = {"file_defaults", "elliptic_impratio100"};
+
 struct Result {
   std::string robot;
   double mass_kg = 0;
   int kestrel_shapes = 0;
-  double kestrel_ns = 0, mujoco_ns = 0;
-  double kestrel_height = 0, mujoco_height = 0;
-  double kestrel_fn = 0, mujoco_fn = 0;
-  double kestrel_iters = 0;
-  int kestrel_iters_max = 0;
-  double kestrel_contacts = 0, mujoco_ncon = 0, mujoco_solver_iter = 0;
-  double kestrel_settle_drift = 0, mujoco_settle_drift = 0;  // base x-y distance moved during the settling (m)
-  double kestrel_run_drift = 0, mujoco_run_drift = 0;        // ... during one timed rep (m)
-  double kestrel_run_dz = 0, mujoco_run_dz = 0;              // base height change during one timed rep (m)
+  SimFigures k;
+  SimFigures mj[kMujocoConfigs];
+  std::string mj_desc[kMujocoConfigs];
   bool ok = true;
   std::string problem;
 };
@@ -194,7 +209,7 @@ struct MujocoSide {
     if (m != nullptr) mj_deleteModel(m);
   }
 
-  bool init(const std::string& robot_path, double gain_p, double gain_d, std::string& err) {
+  bool init(const std::string& robot_path, int config, double gain_p, double gain_d, std::string& err) {
     // The robot file with a floor: a wrapper that includes it (absolute path) and adds a plane.
     char tmp[] = "/tmp/kestrel_bench_legged_XXXXXX.xml";
     const int fd = mkstemps(tmp, 4);
@@ -227,6 +242,10 @@ struct MujocoSide {
     if (std::fabs(m->opt.timestep - kDt) > 1e-12) {
       err = robot_path + ": MuJoCo's timestep is not 0.005 s";
       return false;
+    }
+    if (config == 1) {
+      m->opt.cone = mjCONE_ELLIPTIC;
+      m->opt.impratio = 100;
     }
     d = mj_makeData(m);
     const int key = mj_name2id(m, mjOBJ_KEY, "home");
@@ -297,34 +316,42 @@ const char* integrator_name(int i) {
   }
 }
 
-bool run_case(const Case& c, const std::string& models, long steps, int reps, Result& out, std::string& mj_desc) {
+std::string describe(const mjModel* m) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "integrator %s, cone %s, impratio %g, solver %s, iterations %d, tolerance %g",
+                integrator_name(m->opt.integrator), m->opt.cone == mjCONE_ELLIPTIC ? "elliptic" : "pyramidal",
+                m->opt.impratio, m->opt.solver == mjSOL_NEWTON ? "Newton" : m->opt.solver == mjSOL_CG ? "CG" : "PGS",
+                m->opt.iterations, m->opt.tolerance);
+  return buf;
+}
+
+bool run_case(const Case& c, const std::string& models, long steps, int reps, Result& out) {
   const std::string path = models + "/" + c.file;
   out.robot = c.name;
   std::string err;
   const auto ks_side = std::make_unique<KestrelSide>();  // large scratch (ConstraintData): on the heap
-  MujocoSide mj;
-  if (!ks_side->init(path, c.kp, c.kd, err) || !mj.init(path, c.kp, c.kd, err)) {
+  MujocoSide mjs[kMujocoConfigs];
+  bool loaded = ks_side->init(path, c.kp, c.kd, err);
+  for (int i = 0; i < kMujocoConfigs && loaded; ++i) loaded = mjs[i].init(path, i, c.kp, c.kd, err);
+  if (!loaded) {
     std::fprintf(stderr, "kestrel_bench_legged_step: %s\n", err.c_str());
     return false;
   }
   KestrelSide& k = *ks_side;
   out.mass_kg = static_cast<double>(k.robot.total_mass_kg);
   out.kestrel_shapes = static_cast<int>(k.shapes.size());
-  if (std::fabs(mj_getTotalmass(mj.m) - out.mass_kg) > 1e-3 * out.mass_kg) {
-    out.ok = false;
-    out.problem += " masses differ (Kestrel " + std::to_string(out.mass_kg) + ", MuJoCo " +
-                   std::to_string(mj_getTotalmass(mj.m)) + ");";
+  for (int i = 0; i < kMujocoConfigs; ++i) {
+    out.mj_desc[i] = describe(mjs[i].m);
+    if (std::fabs(mj_getTotalmass(mjs[i].m) - out.mass_kg) > 1e-3 * out.mass_kg) {
+      out.ok = false;
+      out.problem += " masses differ (Kestrel " + std::to_string(out.mass_kg) + ", MuJoCo " +
+                     std::to_string(mj_getTotalmass(mjs[i].m)) + ");";
+    }
   }
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "integrator %s, cone %s, solver %s, iterations %d, tolerance %g",
-                integrator_name(mj.m->opt.integrator), mj.m->opt.cone == mjCONE_ELLIPTIC ? "elliptic" : "pyramidal",
-                mj.m->opt.solver == mjSOL_NEWTON ? "Newton" : mj.m->opt.solver == mjSOL_CG ? "CG" : "PGS",
-                mj.m->opt.iterations, mj.m->opt.tolerance);
-  mj_desc = buf;
 
-  // Settle 2 s on both sides.
+  // Settle 2 s on every side.
   const int settle = static_cast<int>(std::lround(kSettleS / kDt));
-  const double kx0 = k.x(), ky0 = k.y(), mx0 = mj.x(), my0 = mj.y();
+  const double kx0 = k.x(), ky0 = k.y();
   for (int s = 0; s < settle; ++s) {
     const kestrel::Status st = k.step();
     if (st != kestrel::Status::ok) {
@@ -332,31 +359,46 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       out.problem += " Kestrel's step " + std::to_string(s) + " refused (status " + std::to_string(static_cast<int>(st)) + ");";
       return true;
     }
-    mj.step();
     if (s >= settle - kAverageSteps) {
-      out.kestrel_height += k.z() / kAverageSteps;
-      out.mujoco_height += mj.z() / kAverageSteps;
-      out.kestrel_fn += k.normal_force() / kAverageSteps;
-      out.mujoco_fn += mj.normal_force() / kAverageSteps;
-      out.kestrel_iters += static_cast<double>(k.cd.iterations_used) / kAverageSteps;
-      out.kestrel_iters_max = std::max(out.kestrel_iters_max, k.cd.iterations_used);
-      out.kestrel_contacts += static_cast<double>(k.contacts_last) / kAverageSteps;
-      out.mujoco_ncon += static_cast<double>(mj.d->ncon) / kAverageSteps;
-      out.mujoco_solver_iter += static_cast<double>(mj.d->solver_iter) / kAverageSteps;
+      SimFigures& f = out.k;
+      f.height += k.z() / kAverageSteps;
+      f.fn += k.normal_force() / kAverageSteps;
+      f.iters += static_cast<double>(k.cd.iterations_used) / kAverageSteps;
+      f.iters_max = std::max(f.iters_max, k.cd.iterations_used);
+      f.contacts += static_cast<double>(k.contacts_last) / kAverageSteps;
+      f.rows += static_cast<double>(k.cd.num_rows) / kAverageSteps;
     }
   }
-  out.kestrel_settle_drift = std::hypot(k.x() - kx0, k.y() - ky0);
-  out.mujoco_settle_drift = std::hypot(mj.x() - mx0, mj.y() - my0);
+  out.k.settle_drift = std::hypot(k.x() - kx0, k.y() - ky0);
+  for (int i = 0; i < kMujocoConfigs; ++i) {
+    MujocoSide& mj = mjs[i];
+    SimFigures& f = out.mj[i];
+    const double x0 = mj.x(), y0 = mj.y();
+    for (int s = 0; s < settle; ++s) {
+      mj.step();
+      if (s >= settle - kAverageSteps) {
+        f.height += mj.z() / kAverageSteps;
+        f.fn += mj.normal_force() / kAverageSteps;
+        f.iters += static_cast<double>(mj.d->solver_iter) / kAverageSteps;
+        f.iters_max = std::max(f.iters_max, mj.d->solver_iter);
+        f.contacts += static_cast<double>(mj.d->ncon) / kAverageSteps;
+        f.rows += static_cast<double>(mj.d->nefc) / kAverageSteps;
+      }
+    }
+    f.settle_drift = std::hypot(mj.x() - x0, mj.y() - y0);
+  }
   if (k.overflow) {
     out.ok = false;
     out.problem += " more than " + std::to_string(kMaxContacts) + " Kestrel contacts;";
   }
 
-  // The timed reps, from the settled state each time, interleaved.
+  // The timed reps, from the settled state each time, the sides interleaved.
   const std::vector<real> q_settled = k.q, qd_settled = k.qd;
-  mjData* settled = mj_makeData(mj.m);
-  mj_copyData(settled, mj.m, mj.d);
-  out.kestrel_ns = out.mujoco_ns = 1e300;
+  mjData* settled[kMujocoConfigs];
+  for (int i = 0; i < kMujocoConfigs; ++i) {
+    settled[i] = mj_makeData(mjs[i].m);
+    mj_copyData(settled[i], mjs[i].m, mjs[i].d);
+  }
   bool k_ok = true;
   for (int r = 0; r < reps; ++r) {
     k.q = q_settled;
@@ -364,43 +406,48 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     const auto t0 = Clock::now();
     for (long i = 0; i < steps; ++i) k_ok = (k.step() == kestrel::Status::ok) && k_ok;
     const double kns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / static_cast<double>(steps);
-    out.kestrel_ns = std::min(out.kestrel_ns, kns);
+    out.k.ns = std::min(out.k.ns, kns);
     g_sink = g_sink + k.z();
     if (r == 0) {
-      out.kestrel_run_drift = std::hypot(k.x() - static_cast<double>(q_settled[0]), k.y() - static_cast<double>(q_settled[1]));
-      out.kestrel_run_dz = k.z() - static_cast<double>(q_settled[2]);
+      out.k.rep_drift = std::hypot(k.x() - static_cast<double>(q_settled[0]), k.y() - static_cast<double>(q_settled[1]));
+      out.k.rep_dz = k.z() - static_cast<double>(q_settled[2]);
     }
-    mj_copyData(mj.d, mj.m, settled);
-    const auto t1 = Clock::now();
-    for (long i = 0; i < steps; ++i) mj.step();
-    const double mns = std::chrono::duration<double, std::nano>(Clock::now() - t1).count() / static_cast<double>(steps);
-    out.mujoco_ns = std::min(out.mujoco_ns, mns);
-    g_sink = g_sink + mj.z();
-    if (r == 0) {
-      out.mujoco_run_drift = std::hypot(mj.x() - settled->qpos[0], mj.y() - settled->qpos[1]);
-      out.mujoco_run_dz = mj.z() - settled->qpos[2];
+    for (int c2 = 0; c2 < kMujocoConfigs; ++c2) {
+      MujocoSide& mj = mjs[c2];
+      mj_copyData(mj.d, mj.m, settled[c2]);
+      const auto t1 = Clock::now();
+      for (long i = 0; i < steps; ++i) mj.step();
+      const double mns = std::chrono::duration<double, std::nano>(Clock::now() - t1).count() / static_cast<double>(steps);
+      out.mj[c2].ns = std::min(out.mj[c2].ns, mns);
+      g_sink = g_sink + mj.z();
+      if (r == 0) {
+        out.mj[c2].rep_drift = std::hypot(mj.x() - settled[c2]->qpos[0], mj.y() - settled[c2]->qpos[1]);
+        out.mj[c2].rep_dz = mj.z() - settled[c2]->qpos[2];
+      }
     }
   }
-  mj_deleteData(settled);
+  for (int i = 0; i < kMujocoConfigs; ++i) mj_deleteData(settled[i]);
   if (!k_ok) {
     out.ok = false;
     out.problem += " a timed Kestrel step refused;";
   }
 
-  // Do both stand?
+  // Do both stand? Heights against MuJoCo with the Menagerie's cone (with the file's pyramidal
+  // cone at impratio 1, MuJoCo's soft friction lets the feet creep apart: reported, not checked).
   const double mg = out.mass_kg * kG;
-  if (!(std::fabs(out.kestrel_height - out.mujoco_height) < 0.03)) {
+  if (!(std::fabs(out.k.height - out.mj[1].height) < 0.03)) {
     out.ok = false;
-    out.problem += " base heights differ by more than 3 cm;";
+    out.problem += " base heights differ by more than 3 cm from MuJoCo's (elliptic cone);";
   }
-  if (!(std::fabs(out.kestrel_fn - mg) < 0.1 * mg)) {
+  if (!(std::fabs(out.k.fn - mg) < 0.1 * mg)) {
     out.ok = false;
     out.problem += " Kestrel's normal force is not within 10% of m g;";
   }
-  if (!(std::fabs(out.mujoco_fn - mg) < 0.1 * mg)) {
-    out.ok = false;
-    out.problem += " MuJoCo's normal force is not within 10% of m g;";
-  }
+  for (int i = 0; i < kMujocoConfigs; ++i)
+    if (!(std::fabs(out.mj[i].fn - mg) < 0.1 * mg)) {
+      out.ok = false;
+      out.problem += std::string(" MuJoCo's normal force (") + kMujocoConfigName[i] + ") is not within 10% of m g;";
+    }
   return true;
 }
 
@@ -430,24 +477,22 @@ int main(int argc, char** argv) {
   }
   const Case cases[] = {{"go2", "go2/go2.xml", 20, 0.5}, {"anymal_c", "anymal_c/anymal_c.xml", 80, 2}};
   std::vector<Result> results;
-  std::string mj_desc;
   for (const Case& c : cases) {
     Result r;
-    if (!run_case(c, models, steps, reps, r, mj_desc)) return 1;
+    if (!run_case(c, models, steps, reps, r)) return 1;
     results.push_back(r);
   }
 
-  char header[1024];
+  char header[1400];
   std::snprintf(header, sizeof header,
-                "machine %s (%s, %ld logical CPUs), one thread; compiler %s, flags %s; Kestrel real = %s (the project's "
-                "default build, kestrel_sim's loader), MuJoCo %s in double (%s); dt %g s, settle %g s, best of %d reps "
-                "x %ld steps, interleaved",
+                "machine %s (%s, %ld logical CPUs), one thread; compiler GCC-compatible %s, flags %s; Kestrel real = %s "
+                "(the project's default build, kestrel_sim's loader), PGS defaults (ConstraintParams()), contact margin "
+                "0.01 m; MuJoCo %s in double, %s (file_defaults) / %s (elliptic_impratio100); dt %g s, settle %g s, "
+                "best of %d reps x %ld steps, interleaved; sanity figures: means over the last 0.2 s of the settling",
                 machine.c_str(), cpu_model().c_str(), sysconf(_SC_NPROCESSORS_ONLN), __VERSION__, KESTREL_BENCH_CXX_FLAGS,
-                sizeof(real) == 8 ? "double" : "float", mj_versionString(), mj_desc.c_str(), kDt, kSettleS, reps, steps);
+                sizeof(real) == 8 ? "double" : "float", mj_versionString(), results[0].mj_desc[0].c_str(),
+                results[0].mj_desc[1].c_str(), kDt, kSettleS, reps, steps);
   std::printf("legged physics step on flat ground, PD to home (Go2 kp 20 kd 0.5, ANYmal C kp 80 kd 2)\n# %s\n", header);
-  std::printf("  %-9s %7s %11s %11s %7s %9s %9s %9s %9s %8s %6s %6s %7s %11s %11s\n", "robot", "mass kg", "kestrel ns",
-              "mujoco ns", "ratio", "k z m", "mj z m", "k Fn N", "mj Fn N", "m g N", "k it", "k con", "mj con",
-              "k drift mm", "mj drift mm");
   FILE* f = csv != nullptr ? std::fopen(csv, "w") : nullptr;
   if (csv != nullptr && f == nullptr) {
     std::fprintf(stderr, "kestrel_bench_legged_step: cannot write --csv %s\n", csv);
@@ -455,31 +500,39 @@ int main(int argc, char** argv) {
   }
   if (f != nullptr)
     std::fprintf(f,
-                 "# %s\nrobot,mass_kg,kestrel_ns_per_step,mujoco_ns_per_step,mujoco_over_kestrel,kestrel_base_z_m,"
-                 "mujoco_base_z_m,kestrel_normal_force_n,mujoco_normal_force_n,m_g_n,kestrel_pgs_iterations_mean,"
-                 "kestrel_pgs_iterations_max,kestrel_contacts,mujoco_ncon,mujoco_solver_iter,kestrel_shapes,"
-                 "kestrel_settle_drift_xy_m,mujoco_settle_drift_xy_m,kestrel_rep_drift_xy_m,mujoco_rep_drift_xy_m,"
-                 "kestrel_rep_dz_m,mujoco_rep_dz_m,stands\n",
+                 "# %s\nrobot,mujoco_config,mass_kg,m_g_n,kestrel_ns_per_step,mujoco_ns_per_step,mujoco_over_kestrel,"
+                 "kestrel_base_z_m,mujoco_base_z_m,kestrel_normal_force_n,mujoco_normal_force_n,kestrel_pgs_sweeps_mean,"
+                 "kestrel_pgs_sweeps_max,mujoco_solver_iter_mean,kestrel_contacts,mujoco_ncon,kestrel_rows,mujoco_nefc,"
+                 "kestrel_shapes,kestrel_settle_drift_xy_m,mujoco_settle_drift_xy_m,kestrel_rep_drift_xy_m,"
+                 "mujoco_rep_drift_xy_m,kestrel_rep_dz_m,mujoco_rep_dz_m,stands\n",
                  header);
   bool all_ok = true;
   for (const Result& r : results) {
-    const double ratio = r.mujoco_ns / r.kestrel_ns;
-    std::printf("  %-9s %7.3f %11.1f %11.1f %7.2f %9.4f %9.4f %9.2f %9.2f %8.2f %6.1f %6.1f %7.1f %11.2f %11.2f\n",
-                r.robot.c_str(), r.mass_kg, r.kestrel_ns, r.mujoco_ns, ratio, r.kestrel_height, r.mujoco_height, r.kestrel_fn,
-                r.mujoco_fn, r.mass_kg * kG, r.kestrel_iters, r.kestrel_contacts, r.mujoco_ncon,
-                1e3 * r.kestrel_settle_drift, 1e3 * r.mujoco_settle_drift);
-    std::printf("            Kestrel: %d shapes, PGS sweeps max %d; MuJoCo solver iterations %.1f; one timed rep (%.1f s): "
-                "drift Kestrel %.2f mm (dz %+.2f mm), MuJoCo %.2f mm (dz %+.2f mm)\n",
-                r.kestrel_shapes, r.kestrel_iters_max, r.mujoco_solver_iter, static_cast<double>(steps) * kDt,
-                1e3 * r.kestrel_run_drift, 1e3 * r.kestrel_run_dz, 1e3 * r.mujoco_run_drift, 1e3 * r.mujoco_run_dz);
-    if (f != nullptr)
-      std::fprintf(f, "%s,%.3f,%.1f,%.1f,%.3f,%.5f,%.5f,%.3f,%.3f,%.3f,%.2f,%d,%.2f,%.2f,%.2f,%d,%.3g,%.3g,%.3g,%.3g,%.3g,%.3g,%d\n",
-                   r.robot.c_str(), r.mass_kg, r.kestrel_ns, r.mujoco_ns, ratio, r.kestrel_height, r.mujoco_height,
-                   r.kestrel_fn, r.mujoco_fn, r.mass_kg * kG, r.kestrel_iters, r.kestrel_iters_max, r.kestrel_contacts,
-                   r.mujoco_ncon, r.mujoco_solver_iter, r.kestrel_shapes, r.kestrel_settle_drift, r.mujoco_settle_drift,
-                   r.kestrel_run_drift, r.mujoco_run_drift, r.kestrel_run_dz, r.mujoco_run_dz, r.ok ? 1 : 0);
+    const SimFigures& k = r.k;
+    std::printf("\n%s: %.3f kg, m g %.2f N; Kestrel %d collision shapes; first timed rep %.1f s\n", r.robot.c_str(), r.mass_kg,
+                r.mass_kg * kG, r.kestrel_shapes, static_cast<double>(steps) * kDt);
+    std::printf("  %-30s %11s %7s %8s %8s %11s %7s %7s %10s %14s %10s\n", "side", "ns/step", "MuJoCo/K", "base z", "Fn N",
+                "iters mean/max", "contacts", "rows", "settle mm", "rep drift mm", "rep dz mm");
+    auto line = [&](const char* name, const SimFigures& s, double ratio) {
+      std::printf("  %-30s %11.1f %7.2f %8.4f %8.2f %7.1f/%-6d %7.1f %7.1f %10.2f %14.2f %+10.2f\n", name, s.ns, ratio, s.height,
+                  s.fn, s.iters, s.iters_max, s.contacts, s.rows, 1e3 * s.settle_drift, 1e3 * s.rep_drift, 1e3 * s.rep_dz);
+    };
+    line("kestrel (float)", k, 1.0);
+    for (int i = 0; i < kMujocoConfigs; ++i) {
+      const SimFigures& m = r.mj[i];
+      const std::string name = std::string("mujoco ") + kMujocoConfigName[i];
+      line(name.c_str(), m, m.ns / k.ns);
+      if (f != nullptr)
+        std::fprintf(f,
+                     "%s,%s,%.3f,%.3f,%.1f,%.1f,%.3f,%.5f,%.5f,%.3f,%.3f,%.2f,%d,%.2f,%.2f,%.2f,%.2f,%.2f,%d,%.3g,%.3g,%.3g,%.3g,"
+                     "%.3g,%.3g,%d\n",
+                     r.robot.c_str(), kMujocoConfigName[i], r.mass_kg, r.mass_kg * kG, k.ns, m.ns, m.ns / k.ns, k.height,
+                     m.height, k.fn, m.fn, k.iters, k.iters_max, m.iters, k.contacts, m.contacts, k.rows, m.rows,
+                     r.kestrel_shapes, k.settle_drift, m.settle_drift, k.rep_drift, m.rep_drift, k.rep_dz, m.rep_dz,
+                     r.ok ? 1 : 0);
+    }
     if (!r.ok) {
-      std::fprintf(stderr, "kestrel_bench_legged_step: %s does not stand on both sides:%s\n", r.robot.c_str(), r.problem.c_str());
+      std::fprintf(stderr, "kestrel_bench_legged_step: %s does not stand on every side:%s\n", r.robot.c_str(), r.problem.c_str());
       all_ok = false;
     }
   }
