@@ -4,10 +4,14 @@
 // Goal: <= 3 us per physics step per core, >= 15x MuJoCo per core").
 //
 // Per robot file (models/go2/go2.xml, models/anymal_c/anymal_c.xml):
-//  - MuJoCo (Debian's libmujoco 2.2.2 C library, double, its own defaults for the solver: the file
-//    sets none): a small wrapper MJCF written to a temporary file <include>s the robot file and adds
-//    a floor plane z = 0 (the robot files have none). One physics step = the joint PD below into
-//    d->ctrl (the files' motors, gear 1, ctrlrange = the effort limits) and mj_step.
+//  - MuJoCo (Debian's libmujoco 2.2.2 C library, double): a small wrapper MJCF written to a
+//    temporary file <include>s the robot file and adds a floor plane z = 0 (the robot files have
+//    none). One physics step = the joint PD below into d->ctrl (the files' motors, gear 1, ctrlrange
+//    = the effort limits) and mj_step. Two solver settings, each timed: the file's own (it sets none:
+//    MuJoCo's defaults, Newton, pyramidal cone, impratio 1; its soft friction lets the feet creep
+//    apart under a standing robot, ANYmal C sinking ~6 mm/s) and the MuJoCo Menagerie Go2's
+//    (elliptic cone, impratio 100, "to reduce slippage"; Kestrel's cone is isotropic too), against
+//    which the heights are checked.
 //  - Kestrel: the same file through the sim library's loader (sim/articulated_robot.hpp, which reads
 //    it with the same MuJoCo compiler and translates it once into the core's MultibodyModel), in the
 //    project's default `real` (float, as kestrel_sim is built). Every collision geom of the robot
