@@ -116,6 +116,7 @@ struct KestrelSide {
   ks::ArticulatedRobot robot;
   dy::MultibodyData<ks::kMaxRobotBodies> data;
   dy::ConstraintData<ks::kMaxRobotBodies, kMaxContacts> cd;
+  dy::WarmStart<96> warm;  // the previous step's impulses, as the simulator keeps per robot
   std::vector<dy::CollisionShape> shapes;
   dy::HalfSpace ground;
   std::vector<real> q, qd, tau, kp, kd, q_home;
@@ -187,7 +188,7 @@ struct KestrelSide {
     }
     contacts_last = n;
     return dy::step_constrained(m, data, cd, q.data(), qd.data(), tau.data(), static_cast<real>(kDt), contacts, n,
-                                dy::ConstraintParams(), kp_step.data(), kd_step.data());
+                                dy::ConstraintParams(), kp_step.data(), kd_step.data(), &warm);
   }
 
   double normal_force() const {

@@ -611,7 +611,46 @@ NB_MODULE(_core, m) {
       KESTREL_VIEW(base_pos_w, 3) KESTREL_VIEW(base_quat_xyzw, 4) KESTREL_VIEW(base_euler_xyz, 3)
       KESTREL_VIEW(base_lin_vel_b, 3) KESTREL_VIEW(base_ang_vel_b, 3) KESTREL_VIEW(contact_forces_w, 3)
       KESTREL_VIEW(applied_wrench_b, 6) KESTREL_VIEW(target_w, 3)
+      // Articulated robots (robot kind articulated): legged_gym's joint and link views, zero-copy.
+      KESTREL_VIEW(dof_pos, s.p->sim->num_dofs()) KESTREL_VIEW(dof_vel, s.p->sim->num_dofs())
+      KESTREL_VIEW(torques, s.p->sim->num_dofs())
 #undef KESTREL_VIEW
+      .def_prop_ro("num_dofs", [](KSimulator& s) { return s.sim->num_dofs(); }, "actuated joints per robot (0: not articulated)")
+      .def_prop_ro("num_feet", [](KSimulator& s) { return s.sim->num_feet(); }, "foot bodies per robot")
+      .def_prop_ro("num_links", [](KSimulator& s) { return s.sim->num_links(); }, "bodies per robot")
+      .def_prop_ro("feet_pos_w",
+                   [](nb::pointer_and_handle<KSimulator> s) {
+                     return nb::ndarray<nb::numpy, real, nb::ndim<3>, nb::c_contig>(
+                         const_cast<real*>(s.p->sim->feet_pos_w()),
+                         {s.p->robots(), static_cast<std::size_t>(s.p->sim->num_feet()), std::size_t(3)}, s.h);
+                   },
+                   "(num_robots, num_feet, 3) foot body origins in the world (m), a view on the simulator's buffer.")
+      .def_prop_ro("link_contact_forces_w",
+                   [](nb::pointer_and_handle<KSimulator> s) {
+                     return nb::ndarray<nb::numpy, real, nb::ndim<3>, nb::c_contig>(
+                         const_cast<real*>(s.p->sim->link_contact_forces_w()),
+                         {s.p->robots(), static_cast<std::size_t>(s.p->sim->num_links()), std::size_t(3)}, s.h);
+                   },
+                   "(num_robots, num_links, 3) the ground's force on each body at the last physics step (N, world).")
+      .def(
+          "reset_dofs",
+          [](KSimulator& s, const std::vector<int>& ids, nb::handle pos, nb::handle vel) {
+            const std::size_t rows = ids.size() * static_cast<std::size_t>(s.sim->robots_per_env());
+            const std::size_t nd = static_cast<std::size_t>(s.sim->num_dofs());
+            if (nd == 0) throw nb::value_error("reset_dofs: the robot has no joints (robot kind articulated only)");
+            const char* dims = "(len(env_ids) * robots_per_env, num_dofs)";
+            const real* p = checked_actions<real>(pos, rows, nd, "dof_pos", dims);
+            const real* v = checked_actions<real>(vel, rows, nd, "dof_vel", dims);
+            bool ok = false;
+            {
+              nb::gil_scoped_release release;
+              ok = s.sim->reset_dofs(ids.data(), static_cast<int>(ids.size()), p, v);
+            }
+            if (!ok) throw nb::value_error(s.sim->last_error().c_str());
+          },
+          "env_ids"_a, "dof_pos"_a, "dof_vel"_a,
+          "legged_gym's reset_dofs: joint positions and velocities of the listed envs (arrays of the real dtype).\n"
+          "ValueError (nothing changed) for a bad env id, a wrong shape or non-finite values.")
       .def_prop_ro("lidar_ranges_m",
                    [](nb::pointer_and_handle<KSimulator> s) {
                      return view2<real>(s.p->sim->lidar_ranges_m(), s.p->robots(),

@@ -1,8 +1,9 @@
-# Runs `kestrel run` three times (1 thread, 2 threads, 2 threads again) and checks the final
+# Runs `kestrel run` (the default scenario, or -DSCENARIO=FILE) three times (1 thread, 2 threads, 2 threads again) and checks the final
 # state hashes are equal: bit-identical across thread counts and runs.
 set(hashes "")
 foreach(t 1 2 2)
-  execute_process(COMMAND ${KESTREL} run --envs 64 --steps 200 --threads ${t} --out ${OUT}
+  # SCENARIO (optional): a scenario file to run instead of the default one.
+  execute_process(COMMAND ${KESTREL} run ${SCENARIO} --envs 64 --steps 200 --threads ${t} --out ${OUT}
                   OUTPUT_VARIABLE out RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "kestrel run failed (${rc}):\n${out}")

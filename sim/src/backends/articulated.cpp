@@ -128,7 +128,6 @@ class ArticulatedSimulator final : public Simulator {
     }
     if (!Terrain::build(c.env.terrain, c.seed, terrain_, error)) return false;
 
-    if (const char* it = std::getenv("ART_ITERS")) params_.iterations = std::atoi(it);
     allocate_views(c, static_cast<int>(dof_v_.size()), 0);
     num_dofs_ = static_cast<int>(dof_v_.size());
     num_feet_ = static_cast<int>(robot_.foot_bodies.size());
@@ -190,12 +189,14 @@ class ArticulatedSimulator final : public Simulator {
   }
 
   bool reset_dofs(const int* env_ids, int count, const real* dof_pos, const real* dof_vel) override {
-    const std::string pre = "simulator rigid: reset_dofs: ";
+    // The message is built only on a refusal (a string in the good path would allocate).
+    const char* pre = "simulator rigid: reset_dofs: ";
     const int nd = num_dofs_;
     for (int k = 0; k < count; ++k)
       if (env_ids[k] < 0 || env_ids[k] >= num_envs_)
-        return fail(pre + "env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")");
-    if (!all_finite(dof_pos, count * nd) || !all_finite(dof_vel, count * nd)) return fail(pre + "non-finite dof_pos or dof_vel");
+        return fail(pre + ("env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")"));
+    if (!all_finite(dof_pos, count * nd) || !all_finite(dof_vel, count * nd))
+      return fail(std::string(pre) + "non-finite dof_pos or dof_vel");
     for (int k = 0; k < count; ++k) {
       const std::size_t e = static_cast<std::size_t>(env_ids[k]);
       for (int j = 0; j < nd; ++j) {

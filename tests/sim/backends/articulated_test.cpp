@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "kestrel/kernel/rng.hpp"
@@ -122,4 +123,143 @@ TEST(Articulated, Go2AndAnymalStandAtHomeOnFlatGroundAndOnASlope) {
       }
     }
   }
+}
+
+namespace {
+
+// Random joint targets far beyond the joint ranges (actions of +-50: the PD saturates at the
+// effort limits), redrawn every env-step, on rough ground: the hash of 60 env-steps.
+std::uint64_t random_run(int threads, int envs, std::vector<real>* torques_seen = nullptr, Simulator** keep = nullptr,
+                         std::unique_ptr<Simulator>* owner = nullptr) {
+  WorldConfig c = legged("go2", envs, threads);
+  c.env.terrain.type = TerrainType::heightfield;
+  c.env.terrain.procedural = "random_uniform";
+  c.env.terrain.min_height_m = -0.03_r;
+  c.env.terrain.max_height_m = 0.03_r;
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  EXPECT_TRUE(sim) << err;
+  if (!sim) return 0;
+  RngStream rng(5, 0, kPurposeUser + 40);
+  std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()));
+  for (int s = 0; s < 60; ++s) {
+    for (real& v : a) v = rng.uniform(-50, 50);
+    sim->step(a.data());
+    if (torques_seen != nullptr)
+      torques_seen->insert(torques_seen->end(), sim->torques(), sim->torques() + sim->num_robots() * sim->num_dofs());
+  }
+  const std::uint64_t h = sim->state_hash();
+  if (keep != nullptr) *keep = sim.get();
+  if (owner != nullptr) *owner = std::move(sim);
+  return h;
+}
+
+}  // namespace
+
+TEST(Articulated, RandomTargetsAtTheTorqueLimitsAreFiniteAndThreadCountIndependent) {
+  std::vector<real> torques;
+  Simulator* sim = nullptr;
+  std::unique_ptr<Simulator> owner;
+  const std::uint64_t h1 = random_run(1, 5, &torques, &sim, &owner);
+  EXPECT_EQ(random_run(2, 5), h1);  // slices of 2 and 3 environments
+  EXPECT_EQ(random_run(3, 5), h1);
+  ASSERT_NE(sim, nullptr);
+  // The drive saturates: torques reach the effort limits and never pass them.
+  ArticulatedRobot r;
+  std::string err;
+  ASSERT_TRUE(load_robot_model(sim->config().robot.model_file, r, err));
+  std::vector<real> limit;
+  for (int b = 0; b < r.multibody.num_bodies; ++b)
+    if (r.multibody.dof_index[b] >= 0 && r.multibody.joint[b] != dynamics::JointType::free) limit.push_back(r.multibody.effort_limit[b]);
+  ASSERT_EQ(static_cast<int>(limit.size()), sim->num_dofs());
+  int at_limit = 0;
+  for (std::size_t k = 0; k < torques.size(); ++k) {
+    const real lim = limit[k % limit.size()];
+    ASSERT_TRUE(std::isfinite(torques[k]));
+    EXPECT_LE(std::fabs(torques[k]), lim * (1 + 1e-6));
+    at_limit += std::fabs(torques[k]) >= lim * (1 - 1e-6) ? 1 : 0;
+  }
+  EXPECT_GT(at_limit, static_cast<int>(torques.size() / 4));
+  // Every view finite, dof_pos within the joints' ranges (the limits hold) up to a small overshoot.
+  const int n = sim->num_robots(), nd = sim->num_dofs();
+  for (int i = 0; i < n * 3; ++i) ASSERT_TRUE(std::isfinite(sim->base_pos_w()[i]) && std::isfinite(sim->base_lin_vel_w()[i]));
+  for (int i = 0; i < n * nd; ++i) ASSERT_TRUE(std::isfinite(sim->dof_pos()[i]) && std::isfinite(sim->dof_vel()[i]));
+  for (int i = 0; i < n * sim->num_links() * 3; ++i) ASSERT_TRUE(std::isfinite(sim->link_contact_forces_w()[i]));
+  int j = 0;
+  for (int b = 0; b < r.multibody.num_bodies; ++b) {
+    if (r.multibody.dof_index[b] < 0 || r.multibody.joint[b] == dynamics::JointType::free) continue;
+    if (r.multibody.has_limit[b])
+      for (int i = 0; i < n; ++i) {
+        EXPECT_GE(sim->dof_pos()[i * nd + j], r.multibody.q_min[b] - 0.05);
+        EXPECT_LE(sim->dof_pos()[i * nd + j], r.multibody.q_max[b] + 0.05);
+      }
+    ++j;
+  }
+  EXPECT_EQ(sim->summary().reset_errors, 0u);  // no step refused
+}
+
+TEST(Articulated, SpawnedHalfInTheGroundIsPushedOutAndResetsWriteExactly) {
+  WorldConfig c = legged("anymal_c", 2);
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  EXPECT_EQ(sim->num_dofs(), 12);
+  EXPECT_EQ(sim->num_feet(), 4);
+  EXPECT_EQ(std::string(sim->controller_name()), "joint_pd");
+  // Env 1's base 3 cm above the ground: legs and trunk partly below it.
+  const int env = 1;
+  const real pos[3] = {sim->base_pos_w()[3], sim->base_pos_w()[4], 0.03_r}, quat[4] = {0, 0, 0, 1}, zero3[3] = {0, 0, 0};
+  ASSERT_TRUE(sim->reset_root_states(&env, 1, pos, quat, zero3, zero3)) << sim->last_error();
+  EXPECT_EQ(sim->base_pos_w()[5], 0.03_r);
+  // reset_dofs writes the joints exactly and the views show them at once.
+  std::vector<real> dp(12), dv(12);
+  for (int k = 0; k < 12; ++k) {
+    dp[static_cast<std::size_t>(k)] = 0.01_r * static_cast<real>(k);
+    dv[static_cast<std::size_t>(k)] = -0.02_r * static_cast<real>(k);
+  }
+  ASSERT_TRUE(sim->reset_dofs(&env, 1, dp.data(), dv.data())) << sim->last_error();
+  for (int k = 0; k < 12; ++k) {
+    EXPECT_EQ(sim->dof_pos()[12 + k], dp[static_cast<std::size_t>(k)]);
+    EXPECT_EQ(sim->dof_vel()[12 + k], dv[static_cast<std::size_t>(k)]);
+  }
+  const int bad_env = 7;
+  EXPECT_FALSE(sim->reset_dofs(&bad_env, 1, dp.data(), dv.data()));
+  EXPECT_NE(sim->last_error().find("env id 7"), std::string::npos);
+  dp[3] = std::numeric_limits<real>::quiet_NaN();
+  EXPECT_FALSE(sim->reset_dofs(&env, 1, dp.data(), dv.data()));
+  EXPECT_NE(sim->last_error().find("non-finite"), std::string::npos);
+  sim->set_auto_reset(false);
+  std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()), 0);
+  for (int s = 0; s < 50; ++s) sim->step(a.data());
+  // Climbed out of the ground (at most max_push_mps, not launched) and finite; its first steps
+  // count as base contacts (crashes).
+  EXPECT_GT(sim->base_pos_w()[5], 0.2_r);
+  EXPECT_LT(sim->base_pos_w()[5], 0.8_r);
+  for (int k = 0; k < 6; ++k) EXPECT_TRUE(std::isfinite(sim->base_pos_w()[k]));
+  EXPECT_GE(sim->summary().crashes, 1u);
+  // The feet view is where the feet are: on the ground (their spheres' centres ~3 cm up).
+  for (int f = 0; f < 4; ++f) EXPECT_NEAR(sim->feet_pos_w()[3 * f + 2], 0.03, 0.03);
+}
+
+TEST(Articulated, ThePlanarBackendAndObstaclesRefuseArticulatedRobotsByName) {
+  WorldConfig c = legged("go2", 2);
+  std::string err;
+  EXPECT_FALSE(make_simulator(c, Backend::planar, err));
+  EXPECT_NE(err.find("go2"), std::string::npos);
+  EXPECT_NE(err.find("simulator: rigid"), std::string::npos);
+  WorldConfig bad = legged("go2", 2);
+  bad.robot.model_file = "/nonexistent/robot.xml";
+  err.clear();
+  EXPECT_FALSE(make_simulator(bad, err));
+  EXPECT_NE(err.find("/nonexistent/robot.xml"), std::string::npos);
+  WorldConfig two = legged("go2", 2);
+  two.robot.robots_per_env = 2;
+  err.clear();
+  EXPECT_FALSE(make_simulator(two, err));
+  EXPECT_NE(err.find("robots_per_env"), std::string::npos);
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  ObstacleBox box;
+  EXPECT_FALSE(sim->set_obstacle_box(0, box));
+  EXPECT_NE(sim->last_error().find("articulated"), std::string::npos);
 }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "kestrel/kernel/rng.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
 
@@ -116,5 +117,41 @@ TEST(PlanarHeap, NoAllocationInStepAfterWarmUp) {
                   car ? "ground vehicle" : "multirotor", threads, warm, n);
       EXPECT_EQ(n, 0u) << (car ? "ground vehicle" : "multirotor") << ", threads " << threads;
     }
+  }
+}
+
+TEST(ArticulatedHeap, NoAllocationInStepsResetsAndPushes) {
+  // Articulated robots (sim/src/backends/articulated.cpp): every array is sized at set-up, so not
+  // even the first step allocates; measured over steps with random joint targets, auto-resets
+  // (short episodes), reset_idx, reset_dofs and push_robots, on 1 and 2 threads.
+  for (int threads = 1; threads <= 2; ++threads) {
+    std::string err;
+    WorldConfig cfg;
+    ASSERT_TRUE(registries().robots.make("go2", cfg.robot));
+    ASSERT_TRUE(registries().sims.make("fast_sim", cfg.sim));
+    ASSERT_TRUE(registries().tasks.make("joint_targets", cfg.task));
+    cfg.task.episode_len_env_steps = 30;
+    cfg.env.num_envs = 4;
+    cfg.env.num_physics_steps_per_env_step_mean = 4;
+    cfg.num_threads = threads;
+    std::unique_ptr<Simulator> sim = make_simulator(cfg, err);
+    ASSERT_TRUE(sim) << err;
+    std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()));
+    std::vector<real> dp(static_cast<std::size_t>(sim->num_dofs()), 0.1_r), dv(dp.size(), 0);
+    RngStream rng(3, 0, kPurposeUser + 41);
+    const int ids[2] = {1, 3};
+    const std::size_t before = g_allocations.load();
+    for (int s = 0; s < 200; ++s) {
+      for (real& v : a) v = rng.uniform(-1, 1);
+      sim->step(a.data());
+      if (s % 40 == 0) sim->push_robots();
+      if (s % 55 == 0) sim->reset_idx(ids, 2);
+      if (s % 70 == 0) {
+        EXPECT_TRUE(sim->reset_dofs(ids, 1, dp.data(), dv.data()));
+      }
+    }
+    const std::size_t n = g_allocations.load() - before;
+    EXPECT_GT(sim->summary().episodes_done, 8u);
+    EXPECT_EQ(n, 0u) << "threads " << threads;
   }
 }

@@ -27,7 +27,8 @@
 // a gap s > 0 may close by at most s this step (target -s / h: a fast body meets the ground at the
 // step it arrives, with no tunnelling and no early stop); a penetration -s beyond `slop_m` is
 // removed at `baumgarte` of it per step (target baumgarte (-s - slop) / h; J. Baumgarte, CMAME 1,
-// 1972). Restitution: a contact closing faster than `restitution_threshold_mps` that would close
+// 1972), never faster than max_push_mps (a robot spawned half in the ground climbs out instead of
+// being launched: Box2D caps its push-out speed the same way). Restitution: a contact closing faster than `restitution_threshold_mps` that would close
 // this step leaves at e times its approach speed (Newton's law of impact).
 //
 // Core rules: no heap (fixed-capacity arrays in the caller's scratch ConstraintData), no
@@ -75,6 +76,7 @@ struct ConstraintParams {
   real tolerance_mps = real(1e-6);          // stop once no impulse changes by more than this x W_ii
   real baumgarte = real(0.2);               // share of a penetration removed per step
   real slop_m = real(5e-4);                 // penetration left alone (no jitter at rest)
+  real max_push_mps = 1;                    // fastest a penetration is undone (Box2D's contact push speed)
   real restitution_threshold_mps = real(0.5);  // slower impacts do not bounce
   real limit_margin = real(0.02);           // rad or m: a joint this close to a limit gets its row
   real regularization = real(1e-6);         // relative constraint force mixing on W's diagonal
@@ -268,7 +270,7 @@ template <int N, int C, int W = 1>
     }
     const int rn = rows - 3;
     const real s = ct.separation_m;
-    real target = s > 0 ? -s / dt_s : p.baumgarte * (-s > p.slop_m ? -s - p.slop_m : 0) / dt_s;
+    real target = s > 0 ? -s / dt_s : std::min(p.baumgarte * (-s > p.slop_m ? -s - p.slop_m : 0) / dt_s, p.max_push_mps);
     real v_before = 0;
     for (int k = 0; k < n; ++k) v_before += cd.J[rn][k] * qd[k];
     if (ct.restitution > 0 && v_before < -p.restitution_threshold_mps && s + dt_s * v_before <= 0)
@@ -288,7 +290,7 @@ template <int N, int C, int W = 1>
         cd.leaf[r] = static_cast<std::int16_t>(k);
         cd.key[r] = -(2 + 3 * k + side);  // joint rows: negative keys below -1
         cd.J[r][k] = side == 0 ? real(1) : real(-1);
-        cd.target[r] = gap[side] > 0 ? -gap[side] / dt_s : p.baumgarte * -gap[side] / dt_s;
+        cd.target[r] = gap[side] > 0 ? -gap[side] / dt_s : std::min(p.baumgarte * -gap[side] / dt_s, p.max_push_mps);
       }
     }
     if (m.friction_loss[i] > 0) {
