@@ -123,7 +123,8 @@ TEST(SimArticulatedRobot, AnymalCFromMjcf) {
     if (r.multibody.joint[i] == dynamics::JointType::revolute) {
       EXPECT_NEAR(r.multibody.effort_limit[i], 80, 1e-5);
       EXPECT_EQ(r.multibody.armature[i], 0);
-      EXPECT_EQ(r.multibody.damping[i], 0);
+      EXPECT_NEAR(r.multibody.damping[i], 1, 1e-6);        // Menagerie's ANYdrive D gain
+      EXPECT_NEAR(r.multibody.friction_loss[i], 0.1, 1e-6);  // and torque resolution
     }
   const int haa = find_body(r, "RF_HIP");
   EXPECT_NEAR(r.multibody.q_min[haa], -0.49, 1e-6);

@@ -5,7 +5,9 @@
 // reset_root_states, push_robots, refreshed state tensors and domain-randomisation buffers),
 // adapted to flat float arrays and to Kestrel's robots:
 //   - rigid:  the 3-D batched World (sim/world.hpp: Newton-Euler bodies, libccd/analytic collision
-//             with penalty contact), every robot, environment and sensor it supports;
+//             with penalty contact), every robot, environment and sensor it supports; articulated
+//             robots (robot kind articulated: legged robots from MJCF/URDF files) on the core's
+//             constrained step against the terrain (sim/src/backends/articulated.cpp);
 //   - planar: Box2D 2.4 (sim/src/backends/planar.cpp), one b2World per environment, for robots that move in a
 //             plane: a car-like ground vehicle on the velocity + steering-angle controller
 //             (kinematic bicycle model) or a multirotor held at a fixed altitude; circles and boxes
