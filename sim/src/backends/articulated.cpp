@@ -4,7 +4,8 @@
 // with friction against the terrain, joint limits, joint dry friction) under legged_gym's joint PD.
 //
 // One physics step of an environment (legged_gym's LeggedRobot.step, per physics step):
-//   tau = clip(kp (action_scale a + q_home - q) - kd qd, +-effort)      (recomputed every physics step)
+//   tau = clip(kp (action_scale a + q_home - q) - kd qd, +-effort)      (recomputed every physics step
+//     by the core's joint PD, controllers/joint_pd.hpp: legged_gym's _compute_torques, 'P' mode)
 //   contacts: each collision primitive of the robot (spheres, capsules as their two end spheres,
 //     boxes as their corners) against the terrain's local plane under it (Terrain::height_at and
 //     its slope by central differences: a plane, a height field or a mesh alike)
@@ -21,8 +22,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 
+#include "kestrel/controllers/joint_pd.hpp"
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
@@ -42,6 +45,10 @@ using Scratch = dy::ConstraintData<kMaxRobotBodies, kMaxContacts>;
 constexpr real kEnvSpacing_m = 3;          // legged_gym's env_spacing
 constexpr real kContactMargin_m = 0.01_r;  // speculative contacts (contact.hpp)
 constexpr real kActionClip = 100;          // legged_gym's clip_actions
+constexpr std::size_t kMaxJoints = kMaxRobotBodies;
+constexpr std::size_t kMaxDelay = 4;       // physics steps of action delay the drive can hold
+using Drive = JointPdParams<kMaxJoints, kMaxDelay>;
+using DriveState = JointPdState<kMaxJoints, kMaxDelay>;
 constexpr real kBaseContactThreshold_N = 1;
 constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
 
@@ -89,6 +96,26 @@ class ArticulatedSimulator final : public Simulator {
     }
     if (dof_v_.empty()) {
       error = pre + c.robot.model_file + ": the robot has no revolute or prismatic joint to drive";
+      return false;
+    }
+    if (dof_v_.size() > kMaxJoints) {
+      error = pre + c.robot.model_file + ": more than " + std::to_string(kMaxJoints) + " driven joints";
+      return false;
+    }
+    drive_.num_joints = dof_v_.size();
+    drive_.mode = JointControlMode::position;
+    drive_.action_scale = c.robot.action_scale;
+    drive_.action_clip = kActionClip;
+    drive_.dt_s = c.sim.dt_s;
+    for (std::size_t j = 0; j < dof_v_.size(); ++j) {
+      drive_.kp[j] = c.robot.joint_kp_Nm_rad;
+      drive_.kd[j] = c.robot.joint_kd_Nms_rad;
+      drive_.default_pos_rad[j] = home_[j];
+      // The file's effort limit; none (0) leaves the drive unclipped.
+      drive_.torque_limit_Nm[j] = effort_[j] > 0 ? effort_[j] : std::numeric_limits<real>::max();
+    }
+    if (validate_joint_pd_params(drive_) != Status::ok) {
+      error = pre + "robot.joint_kp_Nm_rad / joint_kd_Nms_rad / action_scale: the joint drive was refused (finite, >= 0)";
       return false;
     }
     for (const RobotGeom& g : robot_.geoms) {
@@ -144,6 +171,7 @@ class ArticulatedSimulator final : public Simulator {
     qd_.assign(n * static_cast<std::size_t>(nv_), 0);
     episode_step_.assign(static_cast<std::size_t>(num_envs_), 0);
     warm_.assign(static_cast<std::size_t>(num_envs_), dy::WarmStart<kWarmRows>{});
+    drive_state_.assign(static_cast<std::size_t>(num_envs_), DriveState{});
     stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
@@ -261,20 +289,24 @@ class ArticulatedSimulator final : public Simulator {
     const real* a = &actions_[ei * static_cast<std::size_t>(action_dim_)];
     real tau[dy::max_dofs<kMaxRobotBodies>()] = {}, kp[dy::max_dofs<kMaxRobotBodies>()] = {},
          kd[dy::max_dofs<kMaxRobotBodies>()] = {};
-    const real gain_p = cfg_.robot.joint_kp_Nm_rad, gain_d = cfg_.robot.joint_kd_Nms_rad;
-    for (std::size_t j = 0; j < dof_v_.size(); ++j) {
+    real qj[kMaxJoints], qdj[kMaxJoints], tj[kMaxJoints];
+    const std::size_t nj = dof_v_.size();
+    for (std::size_t j = 0; j < nj; ++j) {
+      qj[j] = q[dof_q_[j]];
+      qdj[j] = qd[dof_v_[j]];
+    }
+    // A rejected update (non-finite action) holds the last safe torques (joint_pd.hpp's contract).
+    DriveState& ds = drive_state_[ei];
+    (void)update_joint_pd(drive_, ds, qj, qdj, a, tj);
+    for (std::size_t j = 0; j < nj; ++j) {
       const int k = dof_v_[j];
-      const real act = is_finite(a[j]) ? clamp(a[j], -kActionClip, kActionClip) : 0_r;
-      const real target = home_[j] + cfg_.robot.action_scale * act;
-      real t = gain_p * (target - q[dof_q_[j]]) - gain_d * qd[k];
-      if (effort_[j] > 0 && std::fabs(t) > effort_[j]) {
-        t = std::copysign(effort_[j], t);  // saturated: the drive's gains do not act, so none implicit
-      } else {
-        kp[k] = gain_p;
-        kd[k] = gain_d;
+      tau[k] = tj[j];
+      torques_[ei * nj + j] = tj[j];
+      // The drive's gains act on this step's motion unless it saturated: taken implicitly.
+      if (std::fabs(tj[j]) < drive_.torque_limit_Nm[j]) {
+        kp[k] = drive_.kp[j] * ds.scales.kp_scale;
+        kd[k] = drive_.kd[j] * ds.scales.kd_scale;
       }
-      tau[k] = t;
-      torques_[ei * dof_v_.size() + j] = t;
     }
     dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
     int found = 0;
@@ -443,6 +475,7 @@ class ArticulatedSimulator final : public Simulator {
     }
     episode_step_[ei] = 0;
     warm_[ei].count = 0;
+    joint_pd_reset(drive_, drive_state_[ei]);
     std::fill(link_forces_w_.begin() + static_cast<long>(ei * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3),
               link_forces_w_.begin() + static_cast<long>((ei + 1) * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3), 0_r);
     std::fill(torques_.begin() + static_cast<long>(ei * dof_v_.size()), torques_.begin() + static_cast<long>((ei + 1) * dof_v_.size()), 0_r);
@@ -455,6 +488,8 @@ class ArticulatedSimulator final : public Simulator {
   bool floating_ = false;
   std::vector<int> dof_v_, dof_q_;  // per actuated joint: its velocity and configuration coordinate
   std::vector<real> effort_, home_;
+  Drive drive_;                          // the core's joint PD, one parameter set for every robot
+  std::vector<DriveState> drive_state_;  // (envs) its delay line, gain scales, held torques
   std::vector<dy::CollisionShape> shapes_;
   std::unique_ptr<Terrain> terrain_;
   std::vector<Vec3> origins_;
