@@ -36,6 +36,23 @@ void free_body(dy::MultibodyModel<1>& m, const dy::SpatialInertia& b) {
 
 using FreeData = dy::ConstraintData<1, 8>;
 
+// A floating base with two legs of two links each (bodies 1-2 and 3-4), joint axes along y; the
+// joint kinds, axes and offsets vary per test through `leg`.
+template <class Leg>
+void two_legged_tree(dy::MultibodyModel<5>& m, Leg leg) {
+  m.num_bodies = 5;
+  m.parent[0] = -1;
+  m.joint[0] = dy::JointType::free;
+  m.body[0] = solid(5, Vec3(0.05_r, 0.1_r, 0.1_r));
+  const int parents[5] = {-1, 0, 1, 0, 3};
+  for (int i = 1; i < 5; ++i) {
+    m.parent[i] = parents[i];
+    m.joint[i] = dy::JointType::revolute;
+    m.axis[i] = Vec3(0, 1, 0);
+    leg(i);
+  }
+}
+
 // Steps a free body with one shape over a half-space; returns the status of the last step.
 Status step_free(const dy::MultibodyModel<1>& m, dy::MultibodyData<1>& d, FreeData& cd, const dy::CollisionShape& shape,
                  const dy::HalfSpace& ground, real* q, real* qd, real dt) {
@@ -183,16 +200,8 @@ KTEST(Contact, FloatingTreeSpawnedInTheGroundStaysFinite) {
   static dy::MultibodyModel<5> m;
   static dy::MultibodyData<5> d;
   static dy::ConstraintData<5, 8> cd;
-  m.num_bodies = 5;
-  m.parent[0] = -1;
-  m.joint[0] = dy::JointType::free;
-  m.body[0] = solid(5, Vec3(0.05_r, 0.1_r, 0.1_r));
-  const int parents[5] = {-1, 0, 1, 0, 3};
-  for (int i = 1; i < 5; ++i) {
-    m.parent[i] = parents[i];
-    m.joint[i] = dy::JointType::revolute;
-    m.axis[i] = Vec3(0, 1, 0);
-    m.X_tree[i].r = parents[i] == 0 ? Vec3(i == 1 ? 0.2_r : -0.2_r, 0, 0) : Vec3(0, 0, -0.2_r);
+  two_legged_tree(m, [](int i) {
+    m.X_tree[i].r = m.parent[i] == 0 ? Vec3(i == 1 ? 0.2_r : -0.2_r, 0, 0) : Vec3(0, 0, -0.2_r);
     m.body[i] = solid(0.5_r, Vec3::Constant(real(2e-3)));
     m.body[i].com = Vec3(0, 0, -0.1_r);
     m.has_limit[i] = true;
@@ -200,7 +209,7 @@ KTEST(Contact, FloatingTreeSpawnedInTheGroundStaysFinite) {
     m.q_max[i] = 1.5_r;
     m.friction_loss[i] = 0.2_r;
     m.damping[i] = 0.1_r;
-  }
+  });
   KASSERT_EQ(dy::finish_model(m), Status::ok);
   dy::CollisionShape shapes[5];
   for (int i = 0; i < 5; ++i) {
@@ -274,13 +283,7 @@ KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
   static dy::MultibodyModel<5> m;
   static dy::MultibodyData<5> d;
   static dy::ConstraintData<5, 1> cd;
-  m.num_bodies = 5;
-  m.parent[0] = -1;
-  m.joint[0] = dy::JointType::free;
-  m.body[0] = solid(5, Vec3(0.05_r, 0.1_r, 0.1_r));
-  const int parents[5] = {-1, 0, 1, 0, 3};
-  for (int i = 1; i < 5; ++i) {
-    m.parent[i] = parents[i];
+  two_legged_tree(m, [](int i) {
     m.joint[i] = i % 2 ? dy::JointType::revolute : dy::JointType::prismatic;
     m.axis[i] = i < 3 ? Vec3(0, 1, 0) : Vec3(0.6_r, 0, 0.8_r);
     m.X_tree[i].r = Vec3(0.1_r * i, -0.05_r, -0.2_r);
@@ -288,7 +291,7 @@ KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
     m.body[i].com = Vec3(0.01_r, 0, -0.1_r);
     m.damping[i] = 0.3_r;
     m.armature[i] = 0.01_r;
-  }
+  });
   KASSERT_EQ(dy::finish_model(m), Status::ok);
   RngStream rng(2026, 11, 5);
   for (int trial = 0; trial < 20; ++trial) {

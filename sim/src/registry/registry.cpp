@@ -145,26 +145,22 @@ void register_simulators(Registries& r) {
   // Legged robots from the model files of models/ (read when the simulator is built), with
   // legged_gym's joint drives: LeggedGym-Ex's Go2 (stiffness 20, damping 0.5, action scale 0.25)
   // and legged_gym's ANYmal C (80, 2, 0.5).
-  r.robots.add("go2", "Unitree Go2 quadruped (articulated, 12 joints, 15.0 kg): models/go2/go2.xml", [] {
-    RobotConfig c;
-    c.name = "go2";
-    c.kind = robots::RobotKind::articulated;
-    c.model_file = models_dir() + "/go2/go2.xml";
-    c.joint_kp_Nm_rad = 20;
-    c.joint_kd_Nms_rad = 0.5_r;
-    c.action_scale = 0.25_r;
-    return c;
-  });
-  r.robots.add("anymal_c", "ANYbotics ANYmal C quadruped (articulated, 12 joints, 52.1 kg): models/anymal_c/anymal_c.xml", [] {
-    RobotConfig c;
-    c.name = "anymal_c";
-    c.kind = robots::RobotKind::articulated;
-    c.model_file = models_dir() + "/anymal_c/anymal_c.xml";
-    c.joint_kp_Nm_rad = 80;
-    c.joint_kd_Nms_rad = 2;
-    c.action_scale = 0.5_r;
-    return c;
-  });
+  auto legged = [](const char* name, const char* file, real kp, real kd, real scale) {
+    return [=] {
+      RobotConfig c;
+      c.name = name;
+      c.kind = robots::RobotKind::articulated;
+      c.model_file = models_dir() + file;
+      c.joint_kp_Nm_rad = kp;
+      c.joint_kd_Nms_rad = kd;
+      c.action_scale = scale;
+      return c;
+    };
+  };
+  r.robots.add("go2", "Unitree Go2 quadruped (articulated, 12 joints, 15.0 kg): models/go2/go2.xml",
+               legged("go2", "/go2/go2.xml", 20, 0.5_r, 0.25_r));
+  r.robots.add("anymal_c", "ANYbotics ANYmal C quadruped (articulated, 12 joints, 52.1 kg): models/anymal_c/anymal_c.xml",
+               legged("anymal_c", "/anymal_c/anymal_c.xml", 80, 2, 0.5_r));
   r.robots.add("ground_vehicle", "car-like robot (planar only): 3.5 kg, wheelbase 0.33 m, box 0.5 x 0.3 m", [] {
     RobotConfig c;
     c.name = "ground_vehicle";
