@@ -615,6 +615,12 @@ NB_MODULE(_core, m) {
       KESTREL_VIEW(dof_pos, s.p->sim->num_dofs()) KESTREL_VIEW(dof_vel, s.p->sim->num_dofs())
       KESTREL_VIEW(torques, s.p->sim->num_dofs())
 #undef KESTREL_VIEW
+      .def_prop_ro("dr_kp_scale", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<real>(const_cast<real*>(s.p->sim->dr_kp_scale()), {s.p->robots()}, s.h);
+      }, "(num_robots,) each robot's joint stiffness scale, drawn at its resets in robot.joint_kp_scale")
+      .def_prop_ro("dr_kd_scale", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<real>(const_cast<real*>(s.p->sim->dr_kd_scale()), {s.p->robots()}, s.h);
+      }, "(num_robots,) each robot's joint damping scale, drawn at its resets in robot.joint_kd_scale")
       .def_prop_ro("num_dofs", [](KSimulator& s) { return s.sim->num_dofs(); }, "actuated joints per robot (0: not articulated)")
       .def_prop_ro("num_feet", [](KSimulator& s) { return s.sim->num_feet(); }, "foot bodies per robot")
       .def_prop_ro("num_links", [](KSimulator& s) { return s.sim->num_links(); }, "bodies per robot")

@@ -103,7 +103,12 @@ class ArticulatedSimulator final : public Simulator {
       return false;
     }
     drive_.num_joints = dof_v_.size();
-    drive_.mode = JointControlMode::position;
+    drive_.mode = c.robot.joint_control_mode;
+    drive_.delay_steps = static_cast<std::size_t>(std::max(0, c.robot.joint_delay_steps));
+    drive_.gain_scale_ranges = {c.robot.joint_kp_scale_min, c.robot.joint_kp_scale_max, c.robot.joint_kd_scale_min,
+                                c.robot.joint_kd_scale_max};
+    drive_.randomize_gain_scales =
+        c.robot.joint_kp_scale_min != c.robot.joint_kp_scale_max || c.robot.joint_kd_scale_min != c.robot.joint_kd_scale_max;
     drive_.action_scale = c.robot.action_scale;
     drive_.action_clip = kActionClip;
     drive_.dt_s = c.sim.dt_s;
@@ -115,7 +120,8 @@ class ArticulatedSimulator final : public Simulator {
       drive_.torque_limit_Nm[j] = effort_[j] > 0 ? effort_[j] : std::numeric_limits<real>::max();
     }
     if (validate_joint_pd_params(drive_) != Status::ok) {
-      error = pre + "robot.joint_kp_Nm_rad / joint_kd_Nms_rad / action_scale: the joint drive was refused (finite, >= 0)";
+      error = pre + "robot.joint_kp_Nm_rad / joint_kd_Nms_rad / action_scale / joint_delay_steps (<= " + std::to_string(kMaxDelay) +
+              ") / joint_kp_scale / joint_kd_scale (min <= max): the joint drive was refused";
       return false;
     }
     for (const RobotGeom& g : robot_.geoms) {
@@ -172,6 +178,9 @@ class ArticulatedSimulator final : public Simulator {
     episode_step_.assign(static_cast<std::size_t>(num_envs_), 0);
     warm_.assign(static_cast<std::size_t>(num_envs_), dy::WarmStart<kWarmRows>{});
     drive_state_.assign(static_cast<std::size_t>(num_envs_), DriveState{});
+    dr_kp_scale_.assign(n, 1);
+    dr_kd_scale_.assign(n, 1);
+    for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeJointGains);
     stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
@@ -302,10 +311,16 @@ class ArticulatedSimulator final : public Simulator {
       const int k = dof_v_[j];
       tau[k] = tj[j];
       torques_[ei * nj + j] = tj[j];
-      // The drive's gains act on this step's motion unless it saturated: taken implicitly.
+      // The drive's gains act on this step's motion unless it saturated: taken implicitly. 'P':
+      // d tau / d q = -kp, d tau / d qd = -kd; 'V': d tau / d qd = -(kp + kd / dt); 'T': none.
       if (std::fabs(tj[j]) < drive_.torque_limit_Nm[j]) {
-        kp[k] = drive_.kp[j] * ds.scales.kp_scale;
-        kd[k] = drive_.kd[j] * ds.scales.kd_scale;
+        const real gp = drive_.kp[j] * ds.scales.kp_scale, gd = drive_.kd[j] * ds.scales.kd_scale;
+        if (drive_.mode == JointControlMode::position) {
+          kp[k] = gp;
+          kd[k] = gd;
+        } else if (drive_.mode == JointControlMode::velocity) {
+          kd[k] = gp + gd / drive_.dt_s;
+        }
       }
     }
     dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
@@ -475,7 +490,9 @@ class ArticulatedSimulator final : public Simulator {
     }
     episode_step_[ei] = 0;
     warm_[ei].count = 0;
-    joint_pd_reset(drive_, drive_state_[ei]);
+    joint_pd_reset(drive_, drive_state_[ei], rng_gains_[ei]);
+    dr_kp_scale_[ei] = drive_state_[ei].scales.kp_scale;
+    dr_kd_scale_[ei] = drive_state_[ei].scales.kd_scale;
     std::fill(link_forces_w_.begin() + static_cast<long>(ei * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3),
               link_forces_w_.begin() + static_cast<long>((ei + 1) * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3), 0_r);
     std::fill(torques_.begin() + static_cast<long>(ei * dof_v_.size()), torques_.begin() + static_cast<long>((ei + 1) * dof_v_.size()), 0_r);
@@ -490,6 +507,7 @@ class ArticulatedSimulator final : public Simulator {
   std::vector<real> effort_, home_;
   Drive drive_;                          // the core's joint PD, one parameter set for every robot
   std::vector<DriveState> drive_state_;  // (envs) its delay line, gain scales, held torques
+  std::vector<RngStream> rng_gains_;      // (envs) the gain scales' draws
   std::vector<dy::CollisionShape> shapes_;
   std::unique_ptr<Terrain> terrain_;
   std::vector<Vec3> origins_;

@@ -131,6 +131,8 @@ const char* enum_name(const std::pair<const char*, E> (&names)[N], E e) {
   return "(a preset)";
 }
 const char* const kShapes[] = {"sphere", "box", "capsule", "cylinder"};
+const std::pair<const char*, JointControlMode> kJointModes[] = {
+    {"position", JointControlMode::position}, {"velocity", JointControlMode::velocity}, {"torque", JointControlMode::torque}};
 const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall", "wall", "thin", "sphere", "mesh"};
 const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
 const char* const kNavigationActionSpaces[] = {"forward_inclination", "velocity"};
@@ -305,6 +307,16 @@ const Schema<RobotConfig>& robot_schema() {
       real_f<S>("joint_kp_Nm_rad", &S::joint_kp_Nm_rad, "N m/rad", 0, 1e5, "articulated: joint PD stiffness"),
       real_f<S>("joint_kd_Nms_rad", &S::joint_kd_Nms_rad, "N m s/rad", 0, 1e4, "articulated: joint PD damping"),
       real_f<S>("action_scale", &S::action_scale, "rad", 0, 100, "articulated: joint target offset per unit of action"),
+      choice_f<S>(
+          "joint_control_mode", "position, velocity, torque",
+          [](S& s, const std::string& v) { return set_enum(kJointModes, v, s.joint_control_mode); },
+          [](const S& s) { return enum_name(kJointModes, s.joint_control_mode); },
+          "articulated: legged_gym's control_type (P: targets about home, V: joint speeds, T: torques)"),
+      int_f<S>("joint_delay_steps", &S::joint_delay_steps, 0, 4, "the joint PD's delay line", "articulated: physics steps of action delay"),
+      range_f<S>("joint_kp_scale", &S::joint_kp_scale_min, &S::joint_kp_scale_max, "", 1e-3, 1e3,
+                 "articulated: joint stiffness scale drawn per reset, [min, max]"),
+      range_f<S>("joint_kd_scale", &S::joint_kd_scale_min, &S::joint_kd_scale_max, "", 1e-3, 1e3,
+                 "articulated: joint damping scale drawn per reset, [min, max]"),
   };
   static const StructuralKey st[] = {
       {"urdf", "URDF file: mass, inertia, collision shape and rotors (the keys here override it)"},

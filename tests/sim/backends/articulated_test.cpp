@@ -263,3 +263,77 @@ TEST(Articulated, ThePlanarBackendAndObstaclesRefuseArticulatedRobotsByName) {
   EXPECT_FALSE(sim->set_obstacle_box(0, box));
   EXPECT_NE(sim->last_error().find("articulated"), std::string::npos);
 }
+
+TEST(Articulated, JointGainScalesDelayAndModesFollowTheScenario) {
+  // legged_gym's Kp/Kd randomisation: scales drawn per reset within the ranges, each robot its own,
+  // and the torques they give; the delay line holds the action back; V and T modes drive too.
+  WorldConfig c = legged("go2", 6);
+  c.robot.joint_kp_scale_min = 0.8_r;
+  c.robot.joint_kp_scale_max = 1.2_r;
+  c.robot.joint_kd_scale_min = 0.5_r;
+  c.robot.joint_kd_scale_max = 1.5_r;
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  std::vector<real> kp(sim->dr_kp_scale(), sim->dr_kp_scale() + 6), kd(sim->dr_kd_scale(), sim->dr_kd_scale() + 6);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_GE(kp[static_cast<std::size_t>(i)], 0.8_r);
+    EXPECT_LE(kp[static_cast<std::size_t>(i)], 1.2_r);
+    EXPECT_GE(kd[static_cast<std::size_t>(i)], 0.5_r);
+    EXPECT_LE(kd[static_cast<std::size_t>(i)], 1.5_r);
+  }
+  EXPECT_NE(kp[0], kp[1]);  // drawn per robot
+  std::vector<real> a(static_cast<std::size_t>(6 * 12), 0);
+  sim->step(a.data());
+  // Robots with a stiffer drive hold their home pose closer: the sag of the thigh joints falls
+  // as the kp scale grows (the same weight on every robot).
+  for (int k = 0; k < 100; ++k) sim->step(a.data());
+  ArticulatedRobot r;
+  ASSERT_TRUE(load_robot_model(c.robot.model_file, r, err));
+  int stiff = 0, soft = 0;
+  for (int i = 1; i < 6; ++i) {
+    if (kp[static_cast<std::size_t>(i)] > kp[static_cast<std::size_t>(stiff)]) stiff = i;
+    if (kp[static_cast<std::size_t>(i)] < kp[static_cast<std::size_t>(soft)]) soft = i;
+  }
+  auto sag = [&](int i) {
+    double s = 0;
+    for (int j = 0; j < 12; ++j) s += std::fabs(sim->dof_pos()[i * 12 + j] - r.home_q[static_cast<std::size_t>(7 + j)]);
+    return s;
+  };
+  EXPECT_LT(sag(stiff), sag(soft));
+  const int env = 2;
+  sim->reset_idx(&env, 1);
+  EXPECT_NE(sim->dr_kp_scale()[2], kp[2]);  // redrawn at the reset
+  EXPECT_EQ(sim->dr_kp_scale()[3], kp[3]);  // the others kept
+
+  // Delay: with 3 physics steps of delay, one env-step of 2 physics steps applies no action yet.
+  for (int delay = 0; delay <= 3; delay += 3) {
+    WorldConfig cd = legged("go2", 1);
+    cd.env.num_physics_steps_per_env_step_mean = 2;
+    cd.robot.joint_delay_steps = delay;
+    std::unique_ptr<Simulator> s2 = make_simulator(cd, err);
+    ASSERT_TRUE(s2) << err;
+    std::vector<real> zero(12, 0), big(12, 2);
+    for (int k = 0; k < 50; ++k) s2->step(zero.data());  // settle
+    const real before = s2->torques()[2];
+    s2->step(big.data());
+    const real change = std::fabs(s2->torques()[2] - before);
+    if (delay == 0) {
+      EXPECT_GT(change, 5.0);  // 20 N m/rad x 0.5 rad of target
+    } else {
+      EXPECT_LT(change, 1.0);  // still the old target
+    }
+  }
+  for (const JointControlMode mode : {JointControlMode::velocity, JointControlMode::torque}) {
+    WorldConfig cm = legged("go2", 1);
+    cm.robot.joint_control_mode = mode;
+    std::unique_ptr<Simulator> s3 = make_simulator(cm, err);
+    ASSERT_TRUE(s3) << err;
+    std::vector<real> act(12, 0.1_r);
+    for (int k = 0; k < 20; ++k) s3->step(act.data());
+    for (int j = 0; j < 12; ++j) EXPECT_TRUE(std::isfinite(s3->dof_pos()[j]));
+    if (mode == JointControlMode::torque) {
+      EXPECT_NEAR(s3->torques()[0], 0.1 * cm.robot.action_scale, 1e-6);
+    }
+  }
+}

@@ -317,12 +317,20 @@ template <int N, int C, int W = 1>
     for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) bv += cd.J[r][i] * v_free[i];
     cd.b[r] = bv;
   }
-  for (int r = 0; r < rows; ++r)
+  for (int r = 0; r < rows; ++r) {
+    // Row r's chain once, with Z_r / D (one division per coordinate, not per pair of rows).
+    int chain[kDofs], len = 0;
+    real zd[kDofs];
+    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) {
+      chain[len] = i;
+      zd[len++] = cd.Z[r][i] / cd.H[i][i];
+    }
     for (int c = 0; c <= r; ++c) {
       real w = 0;
-      for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) w += cd.Z[r][i] * cd.Z[c][i] / cd.H[i][i];
+      for (int k = 0; k < len; ++k) w += zd[k] * cd.Z[c][chain[k]];
       cd.W[r][c] = cd.W[c][r] = w;
     }
+  }
 
   // Projected Gauss-Seidel.
   auto residual = [&](int r) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/controllers/joint_pd.hpp"
 #include "kestrel/robots/multirotor.hpp"
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/controllers/controller.hpp"
@@ -178,6 +179,11 @@ struct RobotConfig {
   real joint_kp_Nm_rad = 20;      // legged_gym's Go2 stiffness
   real joint_kd_Nms_rad = 0.5_r;  // and damping
   real action_scale = 0.25_r;     // rad per unit of action
+  JointControlMode joint_control_mode = JointControlMode::position;  // legged_gym's control_type P, V or T
+  int joint_delay_steps = 0;      // physics steps between an action and its torques (the PD's delay line)
+  // legged_gym's Kp / Kd randomisation: per reset, the gains x a scale drawn in [min, max].
+  real joint_kp_scale_min = 1, joint_kp_scale_max = 1;
+  real joint_kd_scale_min = 1, joint_kd_scale_max = 1;
 };
 
 /// Controller config: registry name -> kind, and the Lee family's parameters (LeeParams: gain

@@ -82,6 +82,8 @@ struct ObstacleBox {
 constexpr std::uint32_t kPurposePush = kPurposeUser + 5;
 /// Random stream purpose of run_scripted's joint targets for articulated robots.
 constexpr std::uint32_t kPurposeScriptedTargets = kPurposeUser + 6;
+/// Random stream purpose of the articulated robots' joint-gain scales (drawn at each reset).
+constexpr std::uint32_t kPurposeJointGains = kPurposeUser + 7;
 
 class Simulator {
  public:
@@ -175,6 +177,10 @@ class Simulator {
   const real* feet_pos_w() const { return feet_pos_w_.data(); }  // (robots x feet x 3) m
   /// (robots x links x 3) N: the ground's force on each body at the last physics step.
   const real* link_contact_forces_w() const { return link_forces_w_.data(); }
+  /// legged_gym's dr_kp_scale / dr_kd_scale: each robot's joint-gain scales, drawn at its resets
+  /// in robot.joint_kp_scale / joint_kd_scale (robots).
+  const real* dr_kp_scale() const { return dr_kp_scale_.data(); }
+  const real* dr_kd_scale() const { return dr_kd_scale_.data(); }
   /// legged_gym's reset_dofs: for each listed env, robots_per_env rows of dof_pos and dof_vel
   /// (num_dofs each). False (nothing written, last_error() says why) off articulated robots, for
   /// a bad env id or a non-finite value.
@@ -275,7 +281,7 @@ class Simulator {
   mutable std::uint8_t lazy_ = 0;
   std::vector<real> lidar_;
   int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0;
-  std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_;
+  std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_, dr_kp_scale_, dr_kd_scale_;
   std::vector<RngStream> rng_push_;
   std::string error_;
 };
