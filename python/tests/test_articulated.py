@@ -92,3 +92,13 @@ def test_same_seed_same_hash_for_one_and_two_threads():
             sim.step(rng.uniform(-2, 2, size=(5, 12)).astype(DT))
         return sim.state_hash
     assert run(1) == run(2)
+
+
+def test_gain_scale_views():
+    sim = kestrel.make_simulator(
+        {"robot": {"name": "go2", "joint_kp_scale": [0.8, 1.2], "joint_kd_scale": [0.5, 1.5]}, "sim": "fast_sim",
+         "task": "joint_targets", "env": {"name": "empty"}}, num_envs=6, seed=3)
+    kp, kd = sim.dr_kp_scale, sim.dr_kd_scale
+    assert kp.shape == (6,) and kd.shape == (6,)
+    assert np.all((kp >= 0.8) & (kp <= 1.2)) and np.all((kd >= 0.5) & (kd <= 1.5))
+    assert len(set(kp.tolist())) == 6  # drawn per robot
