@@ -621,6 +621,11 @@ NB_MODULE(_core, m) {
       .def_prop_ro("dr_kd_scale", [](nb::pointer_and_handle<KSimulator> s) {
         return Array1<real>(const_cast<real*>(s.p->sim->dr_kd_scale()), {s.p->robots()}, s.h);
       }, "(num_robots,) each robot's joint damping scale, drawn at its resets in robot.joint_kd_scale")
+      .def_prop_ro("measured_heights", [](nb::pointer_and_handle<KSimulator> s) {
+        static const real kNone = 0;  // a valid pointer for the (robots, 0) view without height points
+        const real* p = s.p->sim->measured_heights();
+        return view2<real>(p != nullptr ? p : &kNone, s.p->robots(), static_cast<std::size_t>(s.p->sim->num_height_points()), s.h);
+      }, "(num_robots, num_height_points) legged_gym's measured_heights: terrain z under each robot's height points (m)")
       .def_prop_ro("num_dofs", [](KSimulator& s) { return s.sim->num_dofs(); }, "actuated joints per robot (0: not articulated)")
       .def_prop_ro("num_feet", [](KSimulator& s) { return s.sim->num_feet(); }, "foot bodies per robot")
       .def_prop_ro("num_links", [](KSimulator& s) { return s.sim->num_links(); }, "bodies per robot")

@@ -102,3 +102,14 @@ def test_gain_scale_views():
     assert kp.shape == (6,) and kd.shape == (6,)
     assert np.all((kp >= 0.8) & (kp <= 1.2)) and np.all((kd >= 0.5) & (kd <= 1.5))
     assert len(set(kp.tolist())) == 6  # drawn per robot
+
+
+def test_measured_heights_view():
+    sim = kestrel.make_simulator(
+        {"robot": "go2", "sim": "fast_sim", "task": "joint_targets",
+         "env": {"name": "empty", "terrain": {"type": "heightfield", "procedural": "slope", "slope": 0.2,
+                                              "measure_heights": True}}}, num_envs=2)
+    h = sim.measured_heights
+    assert h.shape == (2, 17 * 11)
+    np.testing.assert_allclose(h[:, 16 * 11 + 5] - h[:, 5], 0.32, atol=0.01)
+    assert legged("go2", envs=2).measured_heights.shape == (2, 0)

@@ -185,6 +185,22 @@ class ArticulatedSimulator final : public Simulator {
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
     place_origins();
+    if (c.env.terrain.measure_heights) {
+      // legged_gym's height points: the x list times the y list, x-major (as the World's).
+      const std::vector<real>& px = c.env.terrain.measured_points_x_m;
+      const std::vector<real>& py = c.env.terrain.measured_points_y_m;
+      if (px.empty() || py.empty()) {
+        error = pre + "env.terrain.measured_points_x/y: expected non-empty lists";
+        return false;
+      }
+      for (real x : px)
+        for (real y : py) {
+          height_x_b_.push_back(x);
+          height_y_b_.push_back(y);
+        }
+      num_height_points_ = static_cast<int>(height_x_b_.size());
+      heights_.assign(n * height_x_b_.size(), 0);
+    }
     const int threads = std::max(1, std::min(c.num_threads, num_envs_));
     pool_ = std::make_unique<ThreadPool>(threads);
     for (int w = 0; w < threads; ++w) workers_.push_back(std::make_unique<Worker>());
@@ -194,6 +210,7 @@ class ArticulatedSimulator final : public Simulator {
   }
 
   int num_threads() const override { return pool_->size(); }
+  const real* measured_heights() const override { return num_height_points_ > 0 ? heights_.data() : nullptr; }
   const char* controller_name() const override { return "joint_pd"; }
 
   void post_physics_step() override {
@@ -384,6 +401,17 @@ class ArticulatedSimulator final : public Simulator {
     for (int c = 0; c < 3; ++c) contact_w_[3 * ei + c] = total[c];
     crashed_[ei] = Vec3(lf[0], lf[1], lf[2]).norm() > kBaseContactThreshold_N ? 1 : 0;
     for (int c = 0; c < 3; ++c) target_w_[3 * ei + c] = origins_[ei][c];
+    if (num_height_points_ > 0) {
+      // legged_gym's _get_heights: the points turned by the base's yaw about the base.
+      const Vec3 fwd = rotate(s.orientation_wb, Vec3::UnitX());
+      const real fn = std::sqrt(fwd[0] * fwd[0] + fwd[1] * fwd[1]);
+      const real cy = fn > 1e-6_r ? fwd[0] / fn : 1_r, sy = fn > 1e-6_r ? fwd[1] / fn : 0_r;
+      real* out = &heights_[ei * height_x_b_.size()];
+      for (std::size_t k = 0; k < height_x_b_.size(); ++k) {
+        const real px = height_x_b_[k], py = height_y_b_[k];
+        out[k] = terrain_->height_at(s.position_w[0] + cy * px - sy * py, s.position_w[1] + sy * px + cy * py);
+      }
+    }
   }
 
  protected:
@@ -508,6 +536,8 @@ class ArticulatedSimulator final : public Simulator {
   Drive drive_;                          // the core's joint PD, one parameter set for every robot
   std::vector<DriveState> drive_state_;  // (envs) its delay line, gain scales, held torques
   std::vector<RngStream> rng_gains_;      // (envs) the gain scales' draws
+  std::vector<real> height_x_b_, height_y_b_;  // measured_heights points, base-yaw frame
+  std::vector<real> heights_;                  // (envs x points)
   std::vector<dy::CollisionShape> shapes_;
   std::unique_ptr<Terrain> terrain_;
   std::vector<Vec3> origins_;

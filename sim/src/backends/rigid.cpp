@@ -43,6 +43,7 @@ class RigidSimulator final : public Simulator {
     for (int k = 0; k < world_->num_sensors(); ++k)
       if (world_->sensor_config(k).kind != SensorKind::imu) ray_sensors_.push_back(k);
     num_range_images_ = static_cast<int>(ray_sensors_.size());
+    num_height_points_ = world_->num_height_points();
     // The views are refreshed by the World's workers right after their slice of environments
     // stepped (in parallel, in the same dispatch), not by a serial pass afterwards.
     world_->set_after_step(&RigidSimulator::refresh_slice, this);
@@ -56,6 +57,7 @@ class RigidSimulator final : public Simulator {
   }
 
   int num_threads() const override { return world_->num_threads(); }
+  const real* measured_heights() const override { return num_height_points_ > 0 ? world_->measured_heights() : nullptr; }
   const char* controller_name() const override { return cfg_.controller.name.c_str(); }
   World* world() { return world_.get(); }
 

@@ -337,3 +337,32 @@ TEST(Articulated, JointGainScalesDelayAndModesFollowTheScenario) {
     }
   }
 }
+
+TEST(Articulated, MeasuredHeightsFollowTheTerrainAroundTheBase) {
+  // legged_gym's height points on the 0.2-per-metre slope (z rises along +x): points 1.6 m apart
+  // along the base's x differ by 0.32 m while the robot faces +x, and by -0.32 m once it faces -x.
+  WorldConfig c = legged("go2", 1);
+  c.env.terrain.type = TerrainType::heightfield;
+  c.env.terrain.procedural = "slope";
+  c.env.terrain.slope = 0.2_r;
+  c.env.terrain.measure_heights = true;  // the default 17 x 11 points, x in [-0.8, 0.8], y in [-0.5, 0.5]
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  ASSERT_EQ(sim->num_height_points(), 17 * 11);
+  const real* h = sim->measured_heights();
+  ASSERT_NE(h, nullptr);
+  const int front = 16 * 11 + 5, back = 0 * 11 + 5;  // x = +0.8 and -0.8 at y = 0 (x-major)
+  EXPECT_NEAR(h[front] - h[back], 0.32, 0.01);
+  EXPECT_NEAR(h[16 * 11 + 0], h[16 * 11 + 10], 1e-4);  // across y: level
+  // Turned to face -x (yaw pi) at the same place: the points swap sides.
+  const int env = 0;
+  const real pos[3] = {sim->base_pos_w()[0], sim->base_pos_w()[1], sim->base_pos_w()[2]}, quat[4] = {0, 0, 1, 0}, zero[3] = {};
+  ASSERT_TRUE(sim->reset_root_states(&env, 1, pos, quat, zero, zero)) << sim->last_error();
+  EXPECT_NEAR(sim->measured_heights()[front] - sim->measured_heights()[back], -0.32, 0.01);
+  // Without measure_heights: none.
+  std::unique_ptr<Simulator> flat = make_simulator(legged("go2", 1), err);
+  ASSERT_TRUE(flat) << err;
+  EXPECT_EQ(flat->num_height_points(), 0);
+  EXPECT_EQ(flat->measured_heights(), nullptr);
+}

@@ -359,3 +359,25 @@ TEST(Simulator, ControllerFamiliesAndFaultBits) {
   rigid->step(ra.data());
   EXPECT_NE(rigid->summary().fault_bits & kFaultNonFiniteCommand, 0u);
 }
+
+TEST(SimulatorRigid, MeasuredHeightsAreTheWorlds) {
+  // The interface's measured_heights on rigid is the World's own array (legged_gym's height points).
+  WorldConfig c = rigid_config(4);
+  c.env.terrain.type = TerrainType::heightfield;
+  c.env.terrain.procedural = "random_uniform";
+  c.env.terrain.measure_heights = true;
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, Backend::rigid, err);
+  ASSERT_TRUE(sim) << err;
+  sim->step(nullptr);
+  const World* w = rigid_world(*sim);
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(sim->num_height_points(), w->num_height_points());
+  EXPECT_EQ(sim->num_height_points(), 17 * 11);
+  EXPECT_EQ(sim->measured_heights(), w->measured_heights());
+  c.env.terrain.measure_heights = false;
+  std::unique_ptr<Simulator> none = make_simulator(c, Backend::rigid, err);
+  ASSERT_TRUE(none) << err;
+  EXPECT_EQ(none->num_height_points(), 0);
+  EXPECT_EQ(none->measured_heights(), nullptr);
+}

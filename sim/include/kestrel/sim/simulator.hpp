@@ -177,6 +177,12 @@ class Simulator {
   const real* feet_pos_w() const { return feet_pos_w_.data(); }  // (robots x feet x 3) m
   /// (robots x links x 3) N: the ground's force on each body at the last physics step.
   const real* link_contact_forces_w() const { return link_forces_w_.data(); }
+  /// legged_gym's measured_heights: world z of the terrain under each robot's height points
+  /// (env.terrain.measure_heights; measured_points_x_m x measured_points_y_m around the base, turned
+  /// by its yaw, x-major), refreshed after every step and reset; (robots x num_height_points()).
+  /// 0 points (and nullptr) without measure_heights or on planar.
+  int num_height_points() const { return num_height_points_; }
+  virtual const real* measured_heights() const { return nullptr; }
   /// legged_gym's dr_kp_scale / dr_kd_scale: each robot's joint-gain scales, drawn at its resets
   /// in robot.joint_kp_scale / joint_kd_scale (robots).
   const real* dr_kp_scale() const { return dr_kp_scale_.data(); }
@@ -280,7 +286,7 @@ class Simulator {
   mutable std::vector<real> motor_scale_, gain_scale_;
   mutable std::uint8_t lazy_ = 0;
   std::vector<real> lidar_;
-  int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0;
+  int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0, num_height_points_ = 0;
   std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_, dr_kp_scale_, dr_kd_scale_;
   std::vector<RngStream> rng_push_;
   std::string error_;
