@@ -264,9 +264,9 @@ class ArticulatedSimulator final : public Simulator {
 
   void update_sensors() override {}
   void set_auto_reset(bool on) override { auto_reset_ = on; }
-  void set_curriculum_level(real level) override {
-    if (is_finite(level)) curriculum_level_ = clamp(level, 0_r, 1_r);
-  }
+  // The obstacle curriculum's level: articulated robots have no obstacle slots, so nothing reads
+  // it (legged_gym's terrain curriculum is a separate call, not built yet).
+  void set_curriculum_level(real level) override { (void)level; }
   void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const override {
     const Vec3& o = origins_[static_cast<std::size_t>(env)];
     lower_w = o - Vec3(kEnvSpacing_m / 2, kEnvSpacing_m / 2, 1);
@@ -549,7 +549,6 @@ class ArticulatedSimulator final : public Simulator {
   std::unique_ptr<ThreadPool> pool_;
   std::vector<std::unique_ptr<Worker>> workers_;
   bool auto_reset_ = true;
-  real curriculum_level_ = 1;
   dy::ConstraintParams params_;
   std::vector<dy::WarmStart<kWarmRows>> warm_;  // (envs)
 };
