@@ -49,6 +49,12 @@ class EvalResult:
     crash_rate: float
     mean_length: float
     final_distance_m: float
+    # locomotion_task: mean over every step of the first episodes of |cmd_xy - v_xy| (m/s) and
+    # |cmd_yaw - w_z| (rad/s), the commands the step was given and the true (noise-free) velocities
+    # after it; NaN for other tasks. Its success is an episode that reaches the time limit, its
+    # crash a fall (base contact).
+    lin_vel_error_m_s: float = float("nan")
+    yaw_rate_error_rad_s: float = float("nan")
 
 
 def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: int = 1024, seed: int = 1_000_003,
@@ -69,10 +75,27 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
     # within the success radius a success (Aerial Gym's rule), else a timeout.
     navigation = env.task.name == "navigation_task"
     radius = env.task.success_radius_m
+    locomotion = env.task.name == "locomotion_task"
+    lin_err = yaw_err = 0.0
+    err_steps = 0
+    if locomotion:
+        # Commands from the observations (columns 9-11, scaled by the task's obs scales and free of
+        # noise), taken before the step that follows them.
+        scale_lin, scale_yaw = _loco_obs_scales(env_id, overrides)
     before = env.task.infos
     while not done.all():
+        if locomotion:
+            cmd_xy = obs[:, 9:11] / scale_lin
+            cmd_yaw = obs[:, 11] / scale_yaw
         obs, r, te, tr, info = env.step(policy(obs))
         alive = ~done
+        if locomotion:
+            live = alive & ~(te | tr)
+            if live.any():
+                v, w = env.task.base_lin_vel_b, env.task.base_ang_vel_b
+                lin_err += float(np.linalg.norm(cmd_xy[live] - v[live, :2], axis=1).sum())
+                yaw_err += float(np.abs(cmd_yaw[live] - w[live, 2]).sum())
+                err_steps += int(live.sum())
         ret[alive] += r[alive]
         length[alive] += 1
         ended = (te | tr) & alive
@@ -82,21 +105,34 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
                 success[ended] = info["success"][ended]
             if setpoint:
                 dist[ended] = np.linalg.norm(info["final_obs"][ended, :3], axis=1)
+            if locomotion:
+                crash[ended] = te[ended]
+                success[ended] = tr[ended] & ~te[ended]
             if navigation:
                 d = info["final_obs"][ended, 3]
                 dist[ended] = d
                 success[ended] = tr[ended] & ~te[ended] & (d < radius)
                 crash[ended] = te[ended]
             done |= ended
-    if not setpoint and not navigation:  # the task's own counters over exactly the first episodes is not available: use its rates
+    if not setpoint and not navigation and not locomotion:  # the task's own counters over exactly the first episodes is not available: use its rates
         inf = env.task.infos
         eps = max(1, inf["episodes"] - before["episodes"])
         success[:] = False
         success[: int(round(n * (inf["successes"] - before["successes"]) / eps))] = True
         crash[: int(round(n * (inf["crashes"] - before["crashes"]) / eps))] = True
     env.close()
-    return EvalResult(n, float(ret.mean()), float(success.mean()), float(crash.mean()), float(length.mean()),
-                      float(dist.mean()) if setpoint or navigation else float("nan"))
+    res = EvalResult(n, float(ret.mean()), float(success.mean()), float(crash.mean()), float(length.mean()),
+                     float(dist.mean()) if setpoint or navigation else float("nan"))
+    if locomotion and err_steps > 0:
+        res.lin_vel_error_m_s = lin_err / err_steps
+        res.yaw_rate_error_rad_s = yaw_err / err_steps
+    return res
+
+
+def _loco_obs_scales(env_id: str, overrides: dict) -> tuple[float, float]:
+    """locomotion_task's command observation scales (obs_scale_lin_vel, obs_scale_ang_vel) for this id."""
+    sec = dict(overrides.get("task", {}).get("locomotion", {})) if isinstance(overrides.get("task"), dict) else {}
+    return float(sec.get("obs_scale_lin_vel", 2.0)), float(sec.get("obs_scale_ang_vel", 0.25))
 
 
 class _Timer:
@@ -120,10 +156,10 @@ def _rsl_rl_cfg(args) -> dict:
         "num_steps_per_env": args.rollout,
         "save_interval": 10**9,
         "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
-        "actor": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
+        "actor": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": list(args.hidden), "activation": "elu",
                   "obs_normalization": bool(args.obs_norm),
                   "distribution_cfg": {"class_name": "rsl_rl.modules.GaussianDistribution", "init_std": args.init_std}},
-        "critic": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": [64, 64], "activation": "elu",
+        "critic": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": list(args.hidden), "activation": "elu",
                    "obs_normalization": bool(args.obs_norm)},
         "algorithm": {"class_name": "rsl_rl.algorithms.PPO", "num_learning_epochs": args.epochs,
                       "num_mini_batches": args.minibatches, "clip_param": 0.2, "gamma": args.gamma, "lam": args.lam,
@@ -187,7 +223,7 @@ class Learner:
             n_steps = args.rollout
             self.model = PPO("MlpPolicy", self.venv, n_steps=n_steps, batch_size=max(64, n_steps * env.num_envs // args.minibatches),
                              n_epochs=args.epochs, gamma=args.gamma, gae_lambda=args.lam, learning_rate=args.lr, ent_coef=args.entropy,
-                             policy_kwargs={"net_arch": [64, 64], "log_std_init": float(np.log(args.init_std))},
+                             policy_kwargs={"net_arch": list(args.hidden), "log_std_init": float(np.log(args.init_std))},
                              seed=args.seed, device="cpu", verbose=0,
                              tensorboard_log=os.path.join(args.out, "sb3") if args.tensorboard else None)
             self.steps_per_iter = n_steps * env.num_envs
@@ -286,7 +322,8 @@ def plot(rows: list[dict], path: str, title: str) -> None:
     import matplotlib.pyplot as plt
 
     x = [r["env_steps"] for r in rows]
-    fig, ax = plt.subplots(1, 3, figsize=(13, 3.6))
+    tracking = any(np.isfinite(r.get("lin_vel_error_m_s", float("nan"))) for r in rows)
+    fig, ax = plt.subplots(1, 4 if tracking else 3, figsize=(17 if tracking else 13, 3.6))
     ax[0].plot(x, [r["mean_return"] for r in rows], marker="o")
     ax[0].set_title("evaluation return")
     ax[1].plot(x, [100 * r["success_rate"] for r in rows], marker="o", label="success")
@@ -295,6 +332,12 @@ def plot(rows: list[dict], path: str, title: str) -> None:
     ax[1].legend()
     ax[2].plot(x, [r["mean_length"] for r in rows], marker="o")
     ax[2].set_title("episode length (env-steps)")
+    if tracking:
+        ax[3].plot(x, [r["lin_vel_error_m_s"] for r in rows], marker="o", label="|cmd_xy - v_xy| (m/s)")
+        ax[3].plot(x, [r["yaw_rate_error_rad_s"] for r in rows], marker="x", label="|cmd_yaw - w_z| (rad/s)")
+        ax[3].axhline(0.1, color="gray", ls="--", lw=1, label="goal 0.1 m/s")
+        ax[3].set_title("velocity tracking error")
+        ax[3].legend(fontsize=8)
     for a in ax:
         a.set_xlabel("env-steps")
         a.grid(alpha=0.3)
@@ -333,7 +376,18 @@ _VEHICLE_FRAME_OBS = {"Kestrel-PositionSetpoint-v0", "Kestrel-PositionSetpointMo
 
 # Defaults of the options left unset on the command line (help: "None" = these).
 _GENERIC_DEFAULTS = {"envs": 4096, "steps": 20_000_000, "eval_every": 2_000_000, "rollout": 24, "gamma": 0.99,
-                     "obs_norm": 1, "squash": 0, "action_repeat": 1, "shaping": 0.0, "init_std": 1.0}
+                     "obs_norm": 1, "squash": 0, "action_repeat": 1, "shaping": 0.0, "init_std": 1.0, "hidden": "64,64",
+                     "entropy": 0.0, "reward_scale": 0.02, "eval_episodes": 1024}
+# locomotion_task (issue 13): legged_gym's PPO (LeggedRobotCfgPPO: 24 steps per env per update, gamma
+# 0.99, lambda 0.95, entropy 0.01, lr 1e-3 adaptive, 5 epochs x 4 minibatches, init std 1.0) with
+# networks of two hidden layers, 128-64 ELU (legged_gym's flat ANYmal has 128-64-32; the core's MLP,
+# policy/mlp.hpp, which flies the policy in the firmware, has two hidden layers), rewards as the task gives them
+# (already x dt), no observation normalisation (the task scales its observations), actions as
+# given (joint targets home + action_scale x a). Fewer environments than legged_gym's 4096, for
+# more updates per env-step on two cores. Evaluations run 1000-step (20 s) episodes.
+_LEGGED_DEFAULTS = {"envs": 1024, "steps": 30_000_000, "eval_every": 2_500_000, "rollout": 24, "gamma": 0.99,
+                    "obs_norm": 0, "squash": 0, "action_repeat": 1, "shaping": 0.0, "init_std": 1.0,
+                    "hidden": "128,64", "entropy": 0.01, "reward_scale": 1.0, "eval_episodes": 256}
 # Issue 11: Kestrel-PositionSetpoint-v0 (Lee velocity control) stalled at 1-3 % success after 25 M
 # env-steps with the generic settings. What each change fixes (bench/results/python/README.md):
 # - normalised actions (_AUTO_ACTION_SCALE) squashed with tanh (a clamped Gaussian's mean drifts
@@ -418,13 +472,17 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--threads", type=int, default=None, help="simulator threads (default: every core)")
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1: small MLPs gain nothing from more, and OpenMP threads spin against the simulator's)")
     p.add_argument("--eval-every", type=int, default=None, help="env-steps between evaluations")
-    p.add_argument("--eval-episodes", type=int, default=1024)
+    p.add_argument("--eval-episodes", type=int, default=None, help="episodes per evaluation (default 1024, legged ids 256)")
     p.add_argument("--eval-seed", type=int, default=1_000_003, help="seed of the evaluation env (unseen in training)")
     p.add_argument("--eval-level", default="top",
                    help="tasks with a curriculum (navigation_task): the level the evaluation holds ('top': "
                         "task.curriculum.max_level; 'train': the curriculum runs as in training; or a number)")
     p.add_argument("--target-success", type=float, default=None, help="stop at the first evaluation reaching it")
     p.add_argument("--rollout", type=int, default=None, help="learner steps (decisions) per env per update")
+    p.add_argument("--hidden", default=None, help="actor and critic hidden layer sizes, comma list (default 64,64; "
+                   "the legged ids: 128,64); the export to the core's MLP takes two hidden layers")
+    p.add_argument("--final-eval-episodes", type=int, default=None,
+                   help="after training, evaluate the final policy on this many episodes too (summary.json: final_eval)")
     p.add_argument("--epochs", type=int, default=5)
     p.add_argument("--minibatches", type=int, default=4)
     p.add_argument("--lr", type=float, default=1e-3)
@@ -434,9 +492,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--action-repeat", type=int, default=None, help="rsl_rl: env-steps each learner action is held")
     p.add_argument("--shaping", type=float, default=None, help="rsl_rl, position setpoint: potential-based distance shaping (reward units per m)")
     p.add_argument("--lam", type=float, default=0.95, help="GAE lambda")
-    p.add_argument("--entropy", type=float, default=0.0)
+    p.add_argument("--entropy", type=float, default=None)
     p.add_argument("--init-std", type=float, default=None)
-    p.add_argument("--reward-scale", type=float, default=0.02, help="rsl_rl: rewards times this (no value normalisation there)")
+    p.add_argument("--reward-scale", type=float, default=None, help="rsl_rl: rewards times this (no value normalisation there; default 0.02, legged ids 1)")
     p.add_argument("--episode-len", type=int, default=None, help="override task.episode_len_env_steps")
     p.add_argument("--task-set", default=None,
                    help="scenario `task:` keys as a JSON object, e.g. '{\"navigation\": {\"action_space\": \"velocity\"}}' "
@@ -454,9 +512,17 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--export", type=int, default=1, help="write the final policy as --out/policy.onnx and policy.hpp (1/0)")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
-    for k, v in {**_GENERIC_DEFAULTS, **_TASK_DEFAULTS.get(args.task, {})}.items():
+    legged = GYM_IDS.get(args.task, (args.task,))[0] == "locomotion_task"
+    for k, v in {**_GENERIC_DEFAULTS, **(_LEGGED_DEFAULTS if legged else {}), **_TASK_DEFAULTS.get(args.task, {})}.items():
         if getattr(args, k) is None:
             setattr(args, k, v)
+    if isinstance(args.hidden, str):
+        try:
+            args.hidden = [int(x) for x in args.hidden.split(",")]
+        except ValueError:
+            raise SystemExit(f"--hidden: expected a comma list of layer sizes, e.g. 128,64,32; got {args.hidden!r}")
+        if not args.hidden or min(args.hidden) < 1:
+            raise SystemExit(f"--hidden: expected positive layer sizes, got {args.hidden!r}")
 
     overrides = {}
     scale = _AUTO_ACTION_SCALE.get(args.task) if args.action_scale == "auto" else (
@@ -579,6 +645,11 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     bar.close()
 
     log_f.close()
+    final_eval = None
+    if args.final_eval_episodes:
+        t0 = time.perf_counter()
+        res = evaluate(learner.policy(), args.task, args.final_eval_episodes, args.eval_seed + 1, args.threads, **eval_overrides)
+        final_eval = {**asdict(res), "seed": args.eval_seed + 1, "eval_s": round(time.perf_counter() - t0, 3)}
     exported = _export(learner, args, overrides) if args.export else None
     if writer is not None:
         writer.close()
@@ -593,6 +664,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
+               "final_eval": final_eval, "hidden": list(args.hidden),
                "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count()}
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)

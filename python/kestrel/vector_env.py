@@ -39,6 +39,10 @@ from gymnasium.vector.utils import batch_space
 
 import kestrel
 
+def _LEGGED_GYM_JOINTS(robot: str) -> dict:
+    return {"name": robot, "joint_damping_Nms_rad": 0.0, "joint_friction_loss_Nm": 0.0, "joint_armature_kg_m2": 0.0}
+
+
 # Gymnasium id -> (task id, default section overrides).
 GYM_IDS: dict[str, tuple[str, dict]] = {
     # Aerial Gym's position_setpoint_task through Lee velocity control: [vx, vy, vz] (m/s, vehicle
@@ -55,6 +59,18 @@ GYM_IDS: dict[str, tuple[str, dict]] = {
     "Kestrel-PositionSetpointMotors-v0": ("position_setpoint_task", {"controller": "direct_motor_control"}),
     "Kestrel-Navigation-v0": ("navigation_task", {}),
     "Kestrel-GoalBoxThroughGap-v0": ("goal_box_through_gap", {}),
+    # legged_gym's locomotion task (locomotion_task) with each robot's rewards: the registered task
+    # presets locomotion_go2 (LeggedGym-Ex's Go2 scales) and locomotion_anymal_c_flat / _rough
+    # (legged_gym's configs); `kestrel list` describes them.
+    # The robots' joints as legged_gym's assets have them: no passive damping, dry friction or
+    # rotor inertia (the MJCF files carry MuJoCo Menagerie's; Go2's damping of 2 N m s/rad is four
+    # times the drive's kd, and an open-loop trot then barely moves the robot).
+    "Kestrel-Go2-Flat-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("go2"), "env": "legged_flat", "task": "locomotion_go2"}),
+    "Kestrel-Go2-Rough-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("go2"), "env": "legged_rough", "task": "locomotion_go2"}),
+    "Kestrel-AnymalC-Flat-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("anymal_c"), "env": "legged_flat",
+                                                    "task": "locomotion_anymal_c_flat"}),
+    "Kestrel-AnymalC-Rough-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("anymal_c"), "env": "legged_rough",
+                                                     "task": "locomotion_anymal_c_rough"}),
 }
 
 
@@ -62,6 +78,8 @@ def _action_bound(task: str, controller: str) -> float:
     """The range the task clips each action to (the action space's bounds)."""
     if task == "position_setpoint_task":
         return 10.0  # Aerial Gym's robot clips actions to +-10 (task.hpp)
+    if task == "locomotion_task":
+        return 100.0  # legged_gym's clip_actions: joint targets are home + action_scale x action
     if controller == "lee_position_control":
         return 10.0
     return 1.0  # navigation_task and the custom tasks: normalised actions in [-1, 1]
@@ -254,8 +272,9 @@ class KestrelVectorEnv(VectorEnv):
 
 
 def _make(task_id: str, defaults: dict, num_envs: int | None = 1024, seed: int = 0, threads: int | None = None, **kwargs: Any):
-    over = dict(defaults)
-    over.update(kwargs)
+    # Section overrides merge into the id's own (task={"episode_len_env_steps": 20} on top of the
+    # id's `task: locomotion_go2` keeps the preset), as kestrel.scenario merges them.
+    over = kestrel._merge(defaults, kwargs)
     return KestrelVectorEnv(task_id=task_id, num_envs=num_envs, seed=seed, threads=threads, **over)
 
 

@@ -450,11 +450,27 @@ NB_MODULE(_core, m) {
       .def_prop_ro("action_dim", [](KTask& p) { return p.t().action_dim(); })
       .def_prop_ro("num_threads", [](KTask& p) { return p.t().num_threads(); })
       .def_prop_ro("seed", [](KTask& p) { return p.cfg.seed; })
-      .def_prop_ro("controller", [](KTask& p) { return p.cfg.controller.name; })
+      .def_prop_ro("controller",
+                   [](KTask& p) {
+                     // An articulated robot is driven by its joint PD, not the scenario's controller.
+                     return p.cfg.robot.kind == kestrel::robots::RobotKind::articulated
+                                ? std::string(p.t().simulator().controller_name())
+                                : p.cfg.controller.name;
+                   })
       .def_prop_ro("success_radius_m", [](KTask& p) { return static_cast<double>(p.cfg.task.success_radius_m); })
       .def_prop_ro("episode_len_env_steps", [](KTask& p) { return p.cfg.task.episode_len_env_steps; })
       .def_prop_ro("state_hash", [](KTask& p) { return p.t().state_hash(); })
-      .def_prop_ro("infos", [](KTask& p) { return infos_dict(p.t().infos()); }, "Episode statistics since the task was built.")
+      .def_prop_ro(
+          "infos",
+          [](KTask& p) {
+            nb::dict d = infos_dict(p.t().infos());
+            // Reward terms (locomotion_task): rew_<term>, summed over the finished episodes.
+            for (int k = 0; k < p.t().num_reward_terms(); ++k)
+              d[("rew_" + std::string(p.t().reward_term_name(k))).c_str()] = p.t().reward_term_sum(k);
+            return d;
+          },
+          "Episode statistics since the task was built (locomotion_task also rew_<term>: each reward term summed "
+          "over the finished episodes, scaled, as legged_gym's episode_sums).")
       .def_prop_ro(
           "observations",
           [](nb::pointer_and_handle<KTask> s) { return view2<float>(s.p->t().observations(), s.p->n(), s.p->od(), s.h); },
@@ -483,6 +499,18 @@ NB_MODULE(_core, m) {
             return Array1<bool>(reinterpret_cast<bool*>(const_cast<std::uint8_t*>(s.p->t().truncations())), {s.p->n()}, s.h);
           },
           "(num_envs,) bool view: the last step reached the episode length.")
+      .def_prop_ro(
+          "base_lin_vel_b",
+          [](nb::pointer_and_handle<KTask> s) {
+            return view2<real>(s.p->t().simulator().base_lin_vel_b(), s.p->n(), 3, s.h);
+          },
+          "(num_envs, 3) view of the task's robots' base linear velocity in the body frame (m/s), noise-free.")
+      .def_prop_ro(
+          "base_ang_vel_b",
+          [](nb::pointer_and_handle<KTask> s) {
+            return view2<real>(s.p->t().simulator().base_ang_vel_b(), s.p->n(), 3, s.h);
+          },
+          "(num_envs, 3) view of the task's robots' base angular velocity in the body frame (rad/s), noise-free.")
       .def(
           "reset", [](KTask& p) {
             nb::gil_scoped_release release;

@@ -93,9 +93,13 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
   RunReport rep;
   rep.say("kestrel run: %s\n", label.c_str());
   rep.say("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
-          ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), cfg.controller.name.c_str(),
+          ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), task->simulator().controller_name(),
           cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
-  rep.say("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
+  if (cfg.robot.kind == robots::RobotKind::articulated)
+    rep.say("  robot: %s (%s), %d joints, %d feet; scripted policy: every joint held at home\n", cfg.robot.name.c_str(),
+            cfg.robot.model_file.c_str(), task->simulator().num_dofs(), task->simulator().num_feet());
+  else
+    rep.say("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
   double reward_sum = 0, first_quarter = 0, last_quarter = 0;
   const long long quarter = std::max(1LL, steps / 4);
   const auto t0 = std::chrono::steady_clock::now();
@@ -341,8 +345,9 @@ int run(int argc, char** argv) {
   }
   if (cfg.robot.kind == robots::RobotKind::articulated) {
     // Legged robots and arms (sim/src/backends/articulated.cpp): random joint targets (run_scripted).
+    if (cfg.task.name == "locomotion_task") return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
     if (is_rl_task(cfg.task.name)) {
-      std::fprintf(stderr, "kestrel: %s: task %s: the RL tasks drive multirotors; an articulated robot (%s) runs with `kestrel run` and no task\n",
+      std::fprintf(stderr, "kestrel: %s: task %s: drives multirotors; an articulated robot (%s) runs locomotion_task, or `kestrel run` with no task\n",
                    label.c_str(), cfg.task.name.c_str(), cfg.robot.name.c_str());
       return 1;
     }

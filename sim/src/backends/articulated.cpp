@@ -81,6 +81,14 @@ class ArticulatedSimulator final : public Simulator {
       return false;
     }
     if (!load_robot_model(c.robot.model_file, robot_, error)) return false;
+    for (int b = 0; b < robot_.multibody.num_bodies; ++b) {
+      // The scenario's passive joint dynamics replace the file's (legged_gym's assets have none).
+      RobotMultibody& mm = robot_.multibody;
+      if (mm.dof_index[b] < 0 || mm.joint[b] == dy::JointType::free) continue;
+      if (c.robot.joint_damping_Nms_rad >= 0) mm.damping[b] = c.robot.joint_damping_Nms_rad;
+      if (c.robot.joint_friction_loss_Nm >= 0) mm.friction_loss[b] = c.robot.joint_friction_loss_Nm;
+      if (c.robot.joint_armature_kg_m2 >= 0) mm.armature[b] = c.robot.joint_armature_kg_m2;
+    }
     const RobotMultibody& m = robot_.multibody;
     if (!robot_.has_home) {
       error = pre + c.robot.model_file + ": no keyframe named \"home\" (the joint PD's default pose)";
@@ -160,9 +168,20 @@ class ArticulatedSimulator final : public Simulator {
       shapes_.push_back(s);
     }
     if (!Terrain::build(c.env.terrain, c.seed, terrain_, error)) return false;
+    params_.iterations = c.sim.solver_iterations;
 
     allocate_views(c, static_cast<int>(dof_v_.size()), 0);
     num_dofs_ = static_cast<int>(dof_v_.size());
+    layout_.link_names = robot_.body_names;
+    layout_.foot_links = robot_.foot_bodies;
+    for (int b = 0; b < m.num_bodies; ++b) {
+      if (m.dof_index[b] < 0 || m.joint[b] == dy::JointType::free) continue;
+      layout_.dof_names.push_back(robot_.joint_names[static_cast<std::size_t>(b)]);
+      layout_.dof_pos_lower.push_back(m.has_limit[b] ? m.q_min[b] : -std::numeric_limits<real>::infinity());
+      layout_.dof_pos_upper.push_back(m.has_limit[b] ? m.q_max[b] : std::numeric_limits<real>::infinity());
+      layout_.torque_limits.push_back(m.effort_limit[b] > 0 ? m.effort_limit[b] : std::numeric_limits<real>::infinity());
+    }
+    layout_.default_dof_pos = home_;
     num_feet_ = static_cast<int>(robot_.foot_bodies.size());
     num_links_ = m.num_bodies;
     const std::size_t n = static_cast<std::size_t>(num_robots());

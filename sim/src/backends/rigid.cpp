@@ -285,7 +285,9 @@ std::unique_ptr<Simulator> make_rigid_simulator(const WorldConfig& config, std::
 }
 
 World* rigid_world(Simulator& sim) {
-  return sim.backend() == Backend::rigid ? static_cast<RigidSimulator&>(sim).world() : nullptr;
+  // Articulated robots run on the rigid backend too, but not in a World (backends/articulated.cpp).
+  const bool world = sim.backend() == Backend::rigid && sim.config().robot.kind != robots::RobotKind::articulated;
+  return world ? static_cast<RigidSimulator&>(sim).world() : nullptr;
 }
 const World* rigid_world(const Simulator& sim) { return rigid_world(const_cast<Simulator&>(sim)); }
 

@@ -117,18 +117,20 @@ void Simulator::step(const real* actions) {
 
 bool Simulator::reset_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw,
                                   const real* lin_vel_w, const real* ang_vel_w) {
-  const std::string pre = std::string("simulator ") + backend_name() + ": reset_root_states: ";
+  // The prefix is built only on a refusal: a task resets root states inside its step, which must
+  // not allocate.
+  const auto pre = [this] { return std::string("simulator ") + backend_name() + ": reset_root_states: "; };
   for (int k = 0; k < count; ++k)
     if (env_ids[k] < 0 || env_ids[k] >= num_envs_)
-      return fail(pre + "env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")");
+      return fail(pre() + "env id " + std::to_string(env_ids[k]) + " out of range [0, " + std::to_string(num_envs_) + ")");
   const int rows = count * robots_per_env_;
   for (int j = 0; j < rows; ++j) {
     if (!all_finite(pos_w + 3 * j, 3) || !all_finite(quat_xyzw + 4 * j, 4) || !all_finite(lin_vel_w + 3 * j, 3) ||
         !all_finite(ang_vel_w + 3 * j, 3))
-      return fail(pre + "non-finite value in row " + std::to_string(j));
+      return fail(pre() + "non-finite value in row " + std::to_string(j));
     const real* q = quat_xyzw + 4 * j;
     const real n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-    if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail(pre + "quaternion of row " + std::to_string(j) + " is not unit length");
+    if (!(std::fabs(n2 - 1) < 1e-3_r)) return fail(pre() + "quaternion of row " + std::to_string(j) + " is not unit length");
   }
   return set_root_states(env_ids, count, pos_w, quat_xyzw, lin_vel_w, ang_vel_w);
 }

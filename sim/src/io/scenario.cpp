@@ -166,6 +166,23 @@ void apply_task(const YAML::Node& n, TaskConfig& t) {
       apply_schema(r, "task.reward", position_setpoint_reward_schema(), t.reward);
     }
   }
+  if (const YAML::Node lo = n["locomotion"]) {
+    if (!lo.IsMap()) bad("task.locomotion", "expected a map of " + std::string(locomotion_schema().doc));
+    apply_schema(lo, "task.locomotion", locomotion_schema(), t.locomotion);
+    if (const YAML::Node sc = lo["scales"]) {
+      if (!sc.IsMap()) bad("task.locomotion.scales", "expected a map of reward term names to scales");
+      apply_schema(sc, "task.locomotion.scales", locomotion_scales_schema(), t.locomotion.scales);
+    }
+    if (const YAML::Node pc = lo["penalize_contacts_on"]) {
+      if (!pc.IsSequence()) bad("task.locomotion.penalize_contacts_on", "expected a list of body-name fragments, e.g. [thigh, calf]");
+      t.locomotion.penalize_contacts_on.clear();
+      for (std::size_t i = 0; i < pc.size(); ++i) {
+        if (!pc[i].IsScalar() || pc[i].as<std::string>().empty())
+          bad("task.locomotion.penalize_contacts_on[" + std::to_string(i) + "]", "expected a non-empty body-name fragment");
+        t.locomotion.penalize_contacts_on.push_back(pc[i].as<std::string>());
+      }
+    }
+  }
   if (const YAML::Node nav = n["navigation"]) {
     if (!nav.IsMap()) bad("task.navigation", "expected a map of max_speed_m_s, max_yaw_rate_rad_s, pool_rows, pool_cols, reward");
     apply_schema(nav, "task.navigation", navigation_schema(), t.navigation);

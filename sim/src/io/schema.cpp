@@ -155,6 +155,8 @@ const Schema<SimParams>& sim_schema() {
       real_f<S>("friction_coefficient", &S::friction_coefficient, "", 0, 100, "Coulomb friction coefficient"),
       real_f<S>("friction_damping_N_s_m", &S::friction_damping_N_s_m, "N s/m", 0, 1e9,
                 "viscous regularisation of Coulomb friction inside the cone"),
+      int_f<S>("solver_iterations", &S::solver_iterations, 1, 1000, nullptr,
+               "articulated robots: projected Gauss-Seidel sweeps at most per physics step (warm-started)"),
   };
   static const Schema<S> s{"sim", "physics parameters (`sim: NAME` or a map with `name` and overrides)", f, std::size(f), nullptr, 0};
   return s;
@@ -317,6 +319,12 @@ const Schema<RobotConfig>& robot_schema() {
                  "articulated: joint stiffness scale drawn per reset, [min, max]"),
       range_f<S>("joint_kd_scale", &S::joint_kd_scale_min, &S::joint_kd_scale_max, "", 1e-3, 1e3,
                  "articulated: joint damping scale drawn per reset, [min, max]"),
+      real_f<S>("joint_damping_Nms_rad", &S::joint_damping_Nms_rad, "N m s/rad", -1, 1e4,
+                "articulated: passive viscous damping of every actuated joint (-1: the robot file's)"),
+      real_f<S>("joint_friction_loss_Nm", &S::joint_friction_loss_Nm, "N m", -1, 1e4,
+                "articulated: dry friction of every actuated joint (-1: the robot file's)"),
+      real_f<S>("joint_armature_kg_m2", &S::joint_armature_kg_m2, "kg m^2", -1, 1e4,
+                "articulated: rotor inertia of every actuated joint (-1: the robot file's)"),
   };
   static const StructuralKey st[] = {
       {"urdf", "URDF file: mass, inertia, collision shape and rotors (the keys here override it)"},
@@ -388,6 +396,7 @@ const Schema<TaskConfig>& task_schema() {
   };
   static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"},
                                      {"navigation", "navigation_task's action scaling, pooling and reward (section task.navigation)"},
+                                     {"locomotion", "locomotion_task's commands, observations and rewards (section task.locomotion)"},
                                      {"reward", "the reward's constants: position_setpoint_task's (section task.reward); for "
                                                 "navigation_task the keys of task.navigation.reward"}};
   static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f),
@@ -413,6 +422,82 @@ const Schema<NavigationConfig>& navigation_schema() {
   static const StructuralKey st[] = {{"reward", "the reward's constants (section task.navigation.reward)"}};
   static const Schema<S> s{"task.navigation", "navigation_task's actions, image observation and reward", f, std::size(f), st,
                            std::size(st)};
+  return s;
+}
+
+const Schema<LocomotionConfig>& locomotion_schema() {
+  using S = LocomotionConfig;
+  constexpr double kBig = 1e6;
+  static const Field<S> f[] = {
+      real_f<S>("resampling_time_s", &S::resampling_time_s, "s", 1e-3, kBig, "commands resampled this often (and at each reset)"),
+      bool_f<S>("heading_command", &S::heading_command, "the yaw-rate command is clip(0.5 x heading error, -1, 1)"),
+      range_f<S>("lin_vel_x_m_s", &S::lin_vel_x_min_m_s, &S::lin_vel_x_max_m_s, "m/s", -100, 100, "forward velocity command range [min, max]"),
+      range_f<S>("lin_vel_y_m_s", &S::lin_vel_y_min_m_s, &S::lin_vel_y_max_m_s, "m/s", -100, 100, "sideways velocity command range"),
+      range_f<S>("ang_vel_yaw_rad_s", &S::ang_vel_yaw_min_rad_s, &S::ang_vel_yaw_max_rad_s, "rad/s", -100, 100,
+                 "yaw-rate command range (without heading_command)"),
+      range_f<S>("heading_rad", &S::heading_min_rad, &S::heading_max_rad, "rad", -10, 10, "heading command range (heading_command)"),
+      real_f<S>("obs_scale_lin_vel", &S::obs_scale_lin_vel, "", 0, kBig, "observation scales (legged_gym's obs_scales)"),
+      real_f<S>("obs_scale_ang_vel", &S::obs_scale_ang_vel, "", 0, kBig, ""),
+      real_f<S>("obs_scale_dof_pos", &S::obs_scale_dof_pos, "", 0, kBig, ""),
+      real_f<S>("obs_scale_dof_vel", &S::obs_scale_dof_vel, "", 0, kBig, ""),
+      real_f<S>("obs_scale_height", &S::obs_scale_height, "", 0, kBig, "height samples: clip(base z - 0.5 - h, -1, 1) x this"),
+      real_f<S>("clip_observations", &S::clip_observations, "", 0, kBig, "every observation clipped to +-this"),
+      bool_f<S>("add_noise", &S::add_noise, "uniform observation noise +-(noise_* x noise_level x the observation's scale)"),
+      real_f<S>("noise_level", &S::noise_level, "", 0, kBig, ""),
+      real_f<S>("noise_lin_vel", &S::noise_lin_vel, "m/s", 0, kBig, ""),
+      real_f<S>("noise_ang_vel", &S::noise_ang_vel, "rad/s", 0, kBig, ""),
+      real_f<S>("noise_gravity", &S::noise_gravity, "", 0, kBig, ""),
+      real_f<S>("noise_dof_pos", &S::noise_dof_pos, "rad", 0, kBig, ""),
+      real_f<S>("noise_dof_vel", &S::noise_dof_vel, "rad/s", 0, kBig, ""),
+      real_f<S>("noise_height", &S::noise_height, "m", 0, kBig, ""),
+      bool_f<S>("only_positive_rewards", &S::only_positive_rewards, "the summed reward (before termination) clipped at 0"),
+      real_f<S>("tracking_sigma", &S::tracking_sigma, "", 1e-9, kBig, "tracking rewards exp(-error^2 / sigma)"),
+      real_f<S>("soft_dof_pos_limit", &S::soft_dof_pos_limit, "", 0, kBig, "share of the joint range beyond which dof_pos_limits penalises"),
+      real_f<S>("soft_torque_limit", &S::soft_torque_limit, "", 0, kBig, "share of the effort limit beyond which torque_limits penalises"),
+      real_f<S>("base_height_target_m", &S::base_height_target_m, "m", -kBig, kBig, "base_height term's target"),
+      real_f<S>("max_contact_force_N", &S::max_contact_force_N, "N", 0, kBig, "feet_contact_forces penalises foot forces above this"),
+      bool_f<S>("push_robots", &S::push_robots, "push every robot every push_interval_s (simulator.max_push_vel_xy_m_s)"),
+      real_f<S>("push_interval_s", &S::push_interval_s, "s", 1e-3, kBig, ""),
+      range_f<S>("reset_dof_pos_scale", &S::reset_dof_pos_scale_min, &S::reset_dof_pos_scale_max, "", -kBig, kBig,
+                 "at a reset each joint starts at home x U(min, max)"),
+      real_f<S>("reset_base_vel_max", &S::reset_base_vel_max, "m/s, rad/s", 0, kBig, "at a reset each base velocity component is U(-max, max)"),
+  };
+  static const StructuralKey st[] = {
+      {"scales", "the reward terms' scales (section task.locomotion.scales)"},
+      {"penalize_contacts_on", "body-name fragments (case-insensitive) whose contacts the collision term counts; "
+                               "default [thigh, calf, shank]"}};
+  static const Schema<S> s{"task.locomotion", "locomotion_task's commands, observations, noise, reward parameters and pushes "
+                                               "(legged_gym's LeggedRobotCfg)", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<LocomotionRewardScales>& locomotion_scales_schema() {
+  using S = LocomotionRewardScales;
+  constexpr double kBig = 1e9;
+#define KESTREL_SCALE_ROW(name, doc) real_f<S>(#name, &S::name, "", -kBig, kBig, doc)
+  static const Field<S> f[] = {
+      KESTREL_SCALE_ROW(termination, "1 when a contact ended the episode (added after the only_positive clip)"),
+      KESTREL_SCALE_ROW(tracking_lin_vel, "exp(-|cmd_xy - v_xy|^2 / sigma)"),
+      KESTREL_SCALE_ROW(tracking_ang_vel, "exp(-(cmd_yaw - w_z)^2 / sigma)"),
+      KESTREL_SCALE_ROW(lin_vel_z, "v_z^2 (body frame)"),
+      KESTREL_SCALE_ROW(ang_vel_xy, "w_x^2 + w_y^2"),
+      KESTREL_SCALE_ROW(orientation, "projected gravity x^2 + y^2"),
+      KESTREL_SCALE_ROW(torques, "sum tau^2"),
+      KESTREL_SCALE_ROW(dof_vel, "sum qd^2"),
+      KESTREL_SCALE_ROW(dof_acc, "sum ((qd_last - qd) / dt)^2"),
+      KESTREL_SCALE_ROW(base_height, "(base height - base_height_target_m)^2"),
+      KESTREL_SCALE_ROW(feet_air_time, "sum over first contacts of (air time - 0.5 s), when |cmd_xy| > 0.1"),
+      KESTREL_SCALE_ROW(collision, "penalised bodies touching (> 0.1 N)"),
+      KESTREL_SCALE_ROW(feet_stumble, "1 if a foot's horizontal force exceeds 5 x its vertical"),
+      KESTREL_SCALE_ROW(action_rate, "sum (a_last - a)^2"),
+      KESTREL_SCALE_ROW(stand_still, "sum |q - home| when |cmd_xy| < 0.1"),
+      KESTREL_SCALE_ROW(dof_pos_limits, "sum of the excursions beyond the soft position limits"),
+      KESTREL_SCALE_ROW(torque_limits, "sum of |tau| beyond the soft torque limits"),
+      KESTREL_SCALE_ROW(feet_contact_forces, "sum of foot forces beyond max_contact_force_N"),
+  };
+#undef KESTREL_SCALE_ROW
+  static const Schema<S> s{"task.locomotion.scales", "legged_gym's rewards.scales: per second (x the policy step); 0 drops the term",
+                           f, std::size(f), nullptr, 0};
   return s;
 }
 
@@ -839,6 +924,8 @@ bool check_config_fields(const WorldConfig& c, std::string& error) {
       !check_fields(task_schema(), c.task, "task", error) || !check_fields(curriculum_schema(), c.task.curriculum, "task.curriculum", error) ||
       !check_fields(navigation_schema(), c.task.navigation, "task.navigation", error) ||
       !check_fields(navigation_reward_schema(), c.task.navigation.reward, "task.navigation.reward", error) ||
+      !check_fields(locomotion_schema(), c.task.locomotion, "task.locomotion", error) ||
+      !check_fields(locomotion_scales_schema(), c.task.locomotion.scales, "task.locomotion.scales", error) ||
       !check_fields(position_setpoint_reward_schema(), c.task.reward, "task.reward", error) ||
       !check_fields(controller_schema(), c.controller, "controller", error))
     return false;
@@ -875,6 +962,8 @@ std::string scenario_reference_markdown() {
   document(out, curriculum_schema());
   document(out, navigation_schema());
   document(out, navigation_reward_schema());
+  document(out, locomotion_schema());
+  document(out, locomotion_scales_schema());
   document(out, position_setpoint_reward_schema());
   SensorConfig lidar, camera;
   lidar.kind = SensorKind::lidar;

@@ -9,7 +9,9 @@
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/custom_task.hpp"
+#include "kestrel/sim/locomotion_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
+#include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
 
 namespace kestrel::sim {
@@ -196,7 +198,7 @@ void min_pool_ranges(const real* ranges, int height, int width, real max_range_m
 }
 
 std::vector<std::string> rl_task_ids() {
-  std::vector<std::string> ids = {"navigation_task", "position_setpoint_task"};
+  std::vector<std::string> ids = {"locomotion_task", "navigation_task", "position_setpoint_task"};
   for (const std::string& c : custom_tasks().names()) ids.push_back(c);
   std::sort(ids.begin(), ids.end());
   return ids;
@@ -209,7 +211,8 @@ std::string rl_task_ids_joined() {
 }
 
 bool is_rl_task(const std::string& task_name) {
-  return task_name == "position_setpoint_task" || task_name == "navigation_task" || custom_tasks().has(task_name);
+  return task_name == "position_setpoint_task" || task_name == "navigation_task" || task_name == "locomotion_task" ||
+         custom_tasks().has(task_name);
 }
 
 bool task_defaults(const std::string& task_name, TaskDefaults& out) {
@@ -221,10 +224,20 @@ bool task_defaults(const std::string& task_name, TaskDefaults& out) {
     out = navigation_task_defaults();
     return true;
   }
+  if (task_name == "locomotion_task") {
+    out = locomotion_task_defaults();
+    return true;
+  }
   CustomTaskSpec spec;
-  if (!custom_tasks().make(task_name, spec)) return false;
-  out = spec.defaults;
-  return true;
+  if (custom_tasks().make(task_name, spec)) {
+    out = spec.defaults;
+    return true;
+  }
+  // A registered preset of an RL task (locomotion_go2: locomotion_task with Go2's rewards) brings
+  // that task's scene.
+  TaskConfig preset;
+  if (registries().tasks.make(task_name, preset) && preset.name != task_name) return task_defaults(preset.name, out);
+  return false;
 }
 
 std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std::string& error) {
@@ -243,6 +256,7 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
     p.curriculum = config.task.curriculum;
     return make_navigation_task(config, p, backend, error);
   }
+  if (id == "locomotion_task") return make_locomotion_task(config, backend, error);
   if (custom_tasks().has(id)) {
     CustomTaskSpec spec;
     custom_tasks().make(id, spec);

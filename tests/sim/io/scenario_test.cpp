@@ -56,7 +56,7 @@ TEST(SimScenario, ClearErrors) {
   EXPECT_EQ(error_of("env: {name: empty, num_envs: -3}"),
             "scenario.yaml: env.num_envs: expected an integer in [1, 1048576] (kMaxNumEnvs), got \"-3\"");
   EXPECT_EQ(error_of("robot: quadx"), "scenario.yaml: robot: unknown robot \"quadx\"; known: anymal_c, base_quadrotor, go2, ground_vehicle, hexarotor, x500");
-  EXPECT_NE(error_of("env: nowhere").find("known: dynamic, empty, env_with_obstacles, forest, goal_box_room, lidar_navigation"), std::string::npos);
+  EXPECT_NE(error_of("env: nowhere").find("known: dynamic, empty, env_with_obstacles, forest, goal_box_room, legged_flat, legged_rough, lidar_navigation"), std::string::npos);
   EXPECT_NE(error_of("env: {name: empty, num_env: 3}").find("env.num_env: unknown field; allowed: name,"), std::string::npos);
   EXPECT_NE(error_of("env: {name: empty, reset_on_collision: maybe}").find("env.reset_on_collision: expected true or false"),
             std::string::npos);

@@ -325,7 +325,7 @@ TEST(CustomTask, SpecErrorsAndUserRegistration) {
   EXPECT_NE(err.find("ray sensor"), std::string::npos) << err;
   d.task.name = "no_such_task";
   EXPECT_FALSE(make_task(d, err));
-  EXPECT_NE(err.find("registered task ids: goal_box_through_gap, navigation_task, position_setpoint_task"), std::string::npos) << err;
+  EXPECT_NE(err.find("registered task ids: goal_box_through_gap, locomotion_task, navigation_task, position_setpoint_task"), std::string::npos) << err;
 }
 
 TEST(CustomTask, SameResultForAnyThreadCount) {

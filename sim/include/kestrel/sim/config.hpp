@@ -33,6 +33,9 @@ struct SimParams {
   real contact_damping_N_s_m = 10;    // damping ratio ~0.2 for the base quadrotor
   real friction_coefficient = 0.5_r;
   real friction_damping_N_s_m = 10;   // viscous regularisation of Coulomb friction below the cone
+  // Articulated robots' constraint solver (dynamics/contact.hpp): projected Gauss-Seidel sweeps at
+  // most per physics step (warm-started; PhysX in legged_gym runs 4 position iterations).
+  int solver_iterations = 60;
 };
 
 // convex_hull: a loaded mesh's vertices (obstacles only; see mesh.hpp).
@@ -184,6 +187,12 @@ struct RobotConfig {
   // legged_gym's Kp / Kd randomisation: per reset, the gains x a scale drawn in [min, max].
   real joint_kp_scale_min = 1, joint_kp_scale_max = 1;
   real joint_kd_scale_min = 1, joint_kd_scale_max = 1;
+  // The actuated joints' passive dynamics, replacing the robot file's where >= 0 (-1: the file's).
+  // legged_gym's assets have none (URDF <dynamics> zero, asset.armature 0); the MJCF files carry
+  // MuJoCo Menagerie's (Go2: damping 2 N m s/rad, frictionloss 0.2 N m, armature 0.01 kg m^2).
+  real joint_damping_Nms_rad = -1;
+  real joint_friction_loss_Nm = -1;
+  real joint_armature_kg_m2 = -1;
 };
 
 /// Controller config: registry name -> kind, and the Lee family's parameters (LeeParams: gain
@@ -268,6 +277,52 @@ struct PositionSetpointRewardParams {
   real crash_reward = -20.0f;
 };
 
+/// locomotion_task's reward scales (task.locomotion.scales): legged_gym's LeggedRobotCfg.rewards.scales
+/// (per second: each is multiplied by the policy step, sim dt x decimation, as legged_gym's
+/// _prepare_reward_function does; a zero scale leaves its term out). Defaults: legged_gym's.
+struct LocomotionRewardScales {
+  real termination = 0, tracking_lin_vel = 1, tracking_ang_vel = 0.5_r, lin_vel_z = -2, ang_vel_xy = -0.05_r;
+  real orientation = 0, torques = -1e-5_r, dof_vel = 0, dof_acc = -2.5e-7_r, base_height = 0;
+  real feet_air_time = 1, collision = -1, feet_stumble = 0, action_rate = -0.01_r, stand_still = 0;
+  real dof_pos_limits = 0, torque_limits = 0, feet_contact_forces = 0;
+};
+
+/// locomotion_task (legged_gym's LeggedRobot task over an articulated robot, task.locomotion):
+/// velocity commands, observation scales and noise, reward parameters and pushes. Defaults:
+/// legged_gym's LeggedRobotCfg (legged_robot_config.py).
+struct LocomotionConfig {
+  // commands: lin_vel_x, lin_vel_y (m/s, body frame), ang_vel_yaw (rad/s), heading (rad)
+  real resampling_time_s = 10;
+  bool heading_command = true;  // the yaw-rate command is 0.5 x the heading error, clipped to +-1
+  real lin_vel_x_min_m_s = -1, lin_vel_x_max_m_s = 1;
+  real lin_vel_y_min_m_s = -1, lin_vel_y_max_m_s = 1;
+  real ang_vel_yaw_min_rad_s = -1, ang_vel_yaw_max_rad_s = 1;
+  real heading_min_rad = -3.14_r, heading_max_rad = 3.14_r;
+  // normalization
+  real obs_scale_lin_vel = 2, obs_scale_ang_vel = 0.25_r, obs_scale_dof_pos = 1, obs_scale_dof_vel = 0.05_r;
+  real obs_scale_height = 5;
+  real clip_observations = 100;
+  // noise: uniform in +-(scale x noise_level x the observation's scale)
+  bool add_noise = true;
+  real noise_level = 1;
+  real noise_lin_vel = 0.1_r, noise_ang_vel = 0.2_r, noise_gravity = 0.05_r, noise_dof_pos = 0.01_r, noise_dof_vel = 1.5_r;
+  real noise_height = 0.1_r;
+  // rewards
+  bool only_positive_rewards = true;
+  real tracking_sigma = 0.25_r;
+  real soft_dof_pos_limit = 1, soft_torque_limit = 1;
+  real base_height_target_m = 1;
+  real max_contact_force_N = 100;
+  LocomotionRewardScales scales;
+  // body-name fragments (case-insensitive) whose ground contact the collision term counts
+  std::vector<std::string> penalize_contacts_on = {"thigh", "calf", "shank"};
+  // domain randomisation of the task (the robot's own: robot.joint_kp_scale, ...)
+  bool push_robots = true;
+  real push_interval_s = 15;  // every robot pushed (simulator.max_push_vel_xy_m_s) this often
+  real reset_dof_pos_scale_min = 0.5_r, reset_dof_pos_scale_max = 1.5_r;  // dof_pos = home x U(min, max)
+  real reset_base_vel_max = 0.5_r;  // base linear and angular velocity components U(-max, max) at reset
+};
+
 struct TaskConfig {
   std::string name = "position_setpoint";
   TaskKind kind = TaskKind::position_setpoint;
@@ -292,6 +347,7 @@ struct TaskConfig {
   real setpoint_speed_m_s = 0;
   CurriculumConfig curriculum;  // read by the tasks with a curriculum (navigation_task)
   NavigationConfig navigation;  // read by navigation_task
+  LocomotionConfig locomotion;  // read by locomotion_task
   PositionSetpointRewardParams reward;  // read by position_setpoint_task (navigation_task: navigation.reward)
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env

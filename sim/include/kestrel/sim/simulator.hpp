@@ -85,6 +85,16 @@ constexpr std::uint32_t kPurposeScriptedTargets = kPurposeUser + 6;
 /// Random stream purpose of the articulated robots' joint-gain scales (drawn at each reset).
 constexpr std::uint32_t kPurposeJointGains = kPurposeUser + 7;
 
+/// What legged_gym reads from an articulated robot's asset (Simulator::robot_layout; empty for
+/// other robots): the actuated joints in body order with their home (default) positions, position
+/// limits (-inf / +inf where the joint has none) and effort limits (+inf where none), the bodies'
+/// names, and the foot bodies (indices into the links of link_contact_forces_w, in feet_pos_w order).
+struct RobotLayout {
+  std::vector<std::string> dof_names, link_names;
+  std::vector<real> default_dof_pos, dof_pos_lower, dof_pos_upper, torque_limits;
+  std::vector<int> foot_links;
+};
+
 class Simulator {
  public:
   virtual ~Simulator();
@@ -187,6 +197,7 @@ class Simulator {
   /// in robot.joint_kp_scale / joint_kd_scale (robots).
   const real* dr_kp_scale() const { return dr_kp_scale_.data(); }
   const real* dr_kd_scale() const { return dr_kd_scale_.data(); }
+  const RobotLayout& robot_layout() const { return layout_; }
   /// legged_gym's reset_dofs: for each listed env, robots_per_env rows of dof_pos and dof_vel
   /// (num_dofs each). False (nothing written, last_error() says why) off articulated robots, for
   /// a bad env id or a non-finite value.
@@ -289,6 +300,7 @@ class Simulator {
   int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0, num_height_points_ = 0;
   std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_, dr_kp_scale_, dr_kd_scale_;
   std::vector<RngStream> rng_push_;
+  RobotLayout layout_;
   std::string error_;
 };
 

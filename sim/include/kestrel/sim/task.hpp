@@ -77,6 +77,18 @@ class Task {
   const std::uint8_t* terminations() const { return terminations_.data(); }
   const std::uint8_t* truncations() const { return truncations_.data(); }
   const TaskInfos& infos() const { return infos_; }
+  /// Reward terms the task sums (locomotion_task: legged_gym's, scaled; others: none): their
+  /// names and each one's sum over every finished episode (legged_gym's episode_sums; per episode:
+  /// divide by infos().episodes).
+  virtual int num_reward_terms() const { return 0; }
+  virtual const char* reward_term_name(int k) const {
+    (void)k;
+    return "";
+  }
+  virtual double reward_term_sum(int k) const {
+    (void)k;
+    return 0;
+  }
 
   /// Final observations (gymnasium's same-step autoreset `final_obs`): off by default; once on,
   /// every step() writes, for each environment whose episode ended in that step, the observation
