@@ -10,6 +10,10 @@
 #include "kestrel/kernel/rng.hpp"
 #include "kestrel/policy/mlp.hpp"
 #include "ktest.hpp"
+// The trained Go2 walking policy (issue 13) and observations recorded with it walking, with the
+// actions the host's core gave (bench/python/export_go2_policy.py).
+#include "../../platform/firmware/go2_flat_policy.hpp"
+#include "go2_flat_cases.hpp"
 
 using namespace kestrel;
 namespace pl = kestrel::policy;
@@ -325,6 +329,31 @@ KTEST(PolicyMlp, SameBitsOnEveryTarget) {
 #else
   KEXPECT_EQ(h, 20800889262732618ull);
 #endif
+}
+
+KTEST(PolicyMlp, TrainedGo2PolicySameBitsOnEveryTarget) {
+  // legged_gym's locomotion policy for Go2 (48 observations, 128-64 ELU, 12 joint actions),
+  // trained in the simulator (bench/results/python/go2_flat_rsl_rl.*), on 64 observations of it
+  // walking: the compiled network must give, on the host and on every emulated MCU, the bits the
+  // host's core gave when they were recorded.
+  namespace g = kestrel::policy::generated;
+  int bad = 0, finite = 0;
+  for (int c = 0; c < g::kGo2FlatCases; ++c) {
+    real obs[48], action[12] = {};
+    for (int i = 0; i < 48; ++i) obs[i] = static_cast<real>(g::kGo2FlatObs[c][i]);
+    KEXPECT_EQ(static_cast<int>(pl::mlp_forward(g::kGo2FlatPolicy, obs, action)), static_cast<int>(Status::ok));
+    for (int k = 0; k < 12; ++k) {
+      finite += std::isfinite(action[k]) ? 1 : 0;
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+      // Double builds: the library's exp; within float rounding of the recorded float actions.
+      bad += std::fabs(action[k] - static_cast<real>(g::kGo2FlatActions[c][k])) > 1e-4_r * (1 + std::fabs(action[k]));
+#else
+      bad += std::memcmp(&action[k], &g::kGo2FlatActions[c][k], sizeof(float)) != 0;
+#endif
+    }
+  }
+  KEXPECT_EQ(bad, 0);
+  KEXPECT_EQ(finite, 12 * g::kGo2FlatCases);
 }
 
 KTEST(PolicyMlp, PartsLeftOutGiveTheSameBitsAsTheirIdentity) {

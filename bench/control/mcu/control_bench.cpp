@@ -36,6 +36,8 @@
 #include "kestrel/platform/console.hpp"
 #include "kestrel/policy/mlp.hpp"
 #include "kestrel/sensors/ray_sensor.hpp"
+#include "go2_flat_policy.hpp"  // platform/firmware: the trained Go2 walking policy (issue 13)
+#include "go2_flat_cases.hpp"   // tests/policy: observations recorded with it walking
 
 namespace board = kestrel::platform::board;
 namespace al = kestrel::allocation;
@@ -388,6 +390,15 @@ int main() {
   init_mlp(kestrel::policy::Activation::elu);
   bench("mlp_forward_13_64_64_4_elu", "policy", 20,
         [] { g_sink = static_cast<std::uint32_t>(kestrel::policy::mlp_forward(g_mlp, g_mlp_obs, g_mlp_action)); });
+  // The trained Go2 walking policy (48 observations, 128-64 ELU, 12 joint targets; weights in
+  // flash), one 50 Hz decision on an observation recorded with it walking.
+  {
+    static real obs[48], action[12];
+    for (int i = 0; i < 48; ++i) obs[i] = static_cast<real>(kestrel::policy::generated::kGo2FlatObs[10][i]);
+    bench("mlp_forward_go2_48_128_64_12_elu", "policy", 10, [] {
+      g_sink = static_cast<std::uint32_t>(kestrel::policy::mlp_forward(kestrel::policy::generated::kGo2FlatPolicy, obs, action));
+    });
+  }
   // Articulated-body dynamics (dynamics/multibody.hpp): the legs of a 12-joint quadruped on a
   // fixed trunk (hip abduction about x, hip and knee flexion about y per leg; Go2-like masses),
   // one call each of RNEA, CRBA and ABA at a bent stance with joint velocities; then the same
