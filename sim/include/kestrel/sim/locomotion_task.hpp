@@ -102,6 +102,10 @@ int locomotion_obs_dim(int num_dofs, int num_height_points);
 std::unique_ptr<Task> make_locomotion_task(const WorldConfig& config, Backend backend, std::string& error);
 /// task: locomotion_task's TaskConfig (episode 1000 env-steps = 20 s at legged_gym's 50 Hz).
 TaskConfig locomotion_task_config();
+struct Registries;
+/// Registers locomotion_task and its robot presets (locomotion_go2, locomotion_anymal_c_flat,
+/// locomotion_anymal_c_rough), the sim legged_sim and the envs legged_flat and legged_rough.
+void register_locomotion_builtins(Registries& r);
 /// The scene a locomotion_task scenario gets for the sections it leaves out: legged_sim (dt 5 ms),
 /// env legged_flat (plane, decimation 4), robot go2.
 TaskDefaults locomotion_task_defaults();
