@@ -213,6 +213,9 @@ class Learner:
                     self.on_update(self.steps_per_iter, scalars)
 
             self.runner.logger.log = log_update
+            if getattr(args, "resume", None):
+                # Training goes on from a checkpoint of the same task (actor, critic, optimizer).
+                self.runner.load(args.resume)
         elif self.kind == "sb3":
             from stable_baselines3 import PPO
             from stable_baselines3.common.vec_env import VecNormalize
@@ -483,6 +486,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                    "the legged ids: 128,64); the export to the core's MLP takes two hidden layers")
     p.add_argument("--final-eval-episodes", type=int, default=None,
                    help="after training, evaluate the final policy on this many episodes too (summary.json: final_eval)")
+    p.add_argument("--resume", default=None, help="rsl_rl: go on from this checkpoint (.pt of a run of the same task and networks)")
     p.add_argument("--epochs", type=int, default=5)
     p.add_argument("--minibatches", type=int, default=4)
     p.add_argument("--lr", type=float, default=1e-3)
