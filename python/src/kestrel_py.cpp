@@ -176,6 +176,7 @@ nb::dict infos_dict(const ks::TaskInfos& in) {
   d["mean_episode_reward"] = in.mean_episode_reward();
   d["success_rate"] = in.success_rate();
   d["curriculum_level"] = in.curriculum_level;
+  d["mean_terrain_level"] = in.mean_terrain_level;
   d["curriculum_changes"] = in.curriculum_changes;
   return d;
 }
@@ -649,6 +650,54 @@ NB_MODULE(_core, m) {
       .def_prop_ro("dr_kd_scale", [](nb::pointer_and_handle<KSimulator> s) {
         return Array1<real>(const_cast<real*>(s.p->sim->dr_kd_scale()), {s.p->robots()}, s.h);
       }, "(num_robots,) each robot's joint damping scale, drawn at its resets in robot.joint_kd_scale")
+      .def_prop_ro("dr_friction_values", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<real>(const_cast<real*>(s.p->sim->dr_friction_values()), {s.p->robots()}, s.h);
+      }, "(num_robots,) each robot's ground-contact friction coefficient, drawn at its resets in simulator.friction (-1: not randomised)")
+      .def_prop_ro("dr_restitution_values", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<real>(const_cast<real*>(s.p->sim->dr_restitution_values()), {s.p->robots()}, s.h);
+      }, "(num_robots,) each robot's ground-contact restitution, drawn at its resets in simulator.restitution (-1: not randomised)")
+      .def_prop_ro("dr_added_base_mass", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<real>(const_cast<real*>(s.p->sim->added_mass_kg()), {s.p->robots()}, s.h);
+      }, "(num_robots,) mass added to each robot's base (root body), drawn at its resets in simulator.added_mass_kg (kg)")
+      .def_prop_ro("dr_base_com_bias", [](nb::pointer_and_handle<KSimulator> s) {
+        return view2<real>(s.p->sim->com_bias_b_m(), s.p->robots(), 3, s.h);
+      }, "(num_robots, 3) each robot's base centre-of-mass offset (body frame, m), drawn in [-simulator.com_bias_max_m, max]")
+      .def_prop_ro("dr_joint_armature", [](nb::pointer_and_handle<KSimulator> s) {
+        static const real kNone = 0;  // a valid pointer for the (robots, 0) view without joints
+        const real* p = s.p->sim->num_dofs() > 0 ? s.p->sim->dr_joint_armature() : &kNone;
+        return view2<real>(p, s.p->robots(), static_cast<std::size_t>(s.p->sim->num_dofs()), s.h);
+      }, "(num_robots, num_dofs) each actuated joint's armature in effect (kg m^2), drawn in simulator.joint_armature_kg_m2 when randomised")
+      .def_prop_ro("num_terrain_levels", [](KSimulator& s) { return s.sim->num_terrain_levels(); },
+                   "levels (tile rows) of a tiled terrain (env.terrain.procedural curriculum / randomized); 0 otherwise")
+      .def_prop_ro("terrain_levels", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<int>(const_cast<int*>(s.p->sim->terrain_levels()), {static_cast<std::size_t>(s.p->sim->num_envs())}, s.h);
+      }, "(num_envs,) each environment's terrain level (tiled terrain)")
+      .def_prop_ro("terrain_types", [](nb::pointer_and_handle<KSimulator> s) {
+        return Array1<int>(const_cast<int*>(s.p->sim->terrain_types()), {static_cast<std::size_t>(s.p->sim->num_envs())}, s.h);
+      }, "(num_envs,) each environment's terrain type (tile column, tiled terrain)")
+      .def_prop_ro("env_origins_w", [](nb::pointer_and_handle<KSimulator> s) {
+        return view2<real>(s.p->sim->env_origins_w(), static_cast<std::size_t>(s.p->sim->num_envs()), 3, s.h);
+      }, "(num_envs, 3) where each environment's robot starts (articulated robots: grid or tile origin, m)")
+      .def(
+          "update_terrain_curriculum",
+          [](KSimulator& s, const std::vector<int>& ids, const std::vector<bool>& up, const std::vector<bool>& down) {
+            if (up.size() != ids.size() || down.size() != ids.size())
+              throw nb::value_error(("update_terrain_curriculum: move_up and move_down: expected " + std::to_string(ids.size()) +
+                                     " values each (one per env id)").c_str());
+            std::vector<std::uint8_t> u(up.begin(), up.end()), d(down.begin(), down.end());
+            if (!s.sim->update_terrain_curriculum(ids.data(), static_cast<int>(ids.size()), u.data(), d.data()))
+              throw nb::value_error(s.sim->last_error().c_str());
+          },
+          "env_ids"_a, "move_up"_a, "move_down"_a,
+          "legged_gym's terrain curriculum: levels up / down (past the top: a random level); the robot goes to its new\n"
+          "tile at its next reset. ValueError without a tiled terrain or for a bad env id.")
+      .def(
+          "push_links",
+          [](KSimulator& s) {
+            if (!s.sim->push_links()) throw nb::value_error(s.sim->last_error().c_str());
+          },
+          "LeggedGym-Ex's push_links: a force with components in [-simulator.max_push_force_N, max] on every link's centre of\n"
+          "mass during the next physics step. ValueError for robots without links.")
       .def_prop_ro("measured_heights", [](nb::pointer_and_handle<KSimulator> s) {
         static const real kNone = 0;  // a valid pointer for the (robots, 0) view without height points
         const real* p = s.p->sim->measured_heights();

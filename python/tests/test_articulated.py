@@ -113,3 +113,57 @@ def test_measured_heights_view():
     assert h.shape == (2, 17 * 11)
     np.testing.assert_allclose(h[:, 16 * 11 + 5] - h[:, 5], 0.32, atol=0.01)
     assert legged("go2", envs=2).measured_heights.shape == (2, 0)
+
+
+def test_domain_randomisation_views_and_push_links():
+    # legged_gym's / LeggedGym-Ex's randomisation from the scenario's simulator section, as
+    # zero-copy views drawn per robot at each reset.
+    sim = legged("go2", envs=6, seed=4, simulator={
+        "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
+        "joint_armature_kg_m2": [0.005, 0.02], "max_push_force_N": 50.0})
+    mu, e, dm, com, arm = (sim.dr_friction_values, sim.dr_restitution_values, sim.dr_added_base_mass,
+                           sim.dr_base_com_bias, sim.dr_joint_armature)
+    assert mu.shape == (6,) and e.shape == (6,) and dm.shape == (6,) and com.shape == (6, 3) and arm.shape == (6, 12)
+    assert np.all((mu >= 0.5) & (mu <= 1.25)) and np.all((e >= 0) & (e <= 0.5)) and np.all((dm >= -1) & (dm <= 3))
+    assert np.all(np.abs(com) <= 0.05) and np.all((arm >= 0.005) & (arm <= 0.02))
+    assert len(set(mu.tolist())) == 6
+    before = mu.copy()
+    sim.reset_idx([2])
+    assert sim.dr_friction_values.__array_interface__["data"][0] == mu.__array_interface__["data"][0]
+    assert mu[2] != before[2] and mu[3] == before[3]  # redrawn for the reset env only, in place
+    # push_links moves the robots against the same robots unpushed.
+    ref = legged("go2", envs=6, seed=4, simulator={
+        "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
+        "joint_armature_kg_m2": [0.005, 0.02], "max_push_force_N": 50.0})
+    ref.reset_idx([2])
+    zero = np.zeros((6, 12), dtype=DT)
+    sim.push_links()
+    sim.step(zero)
+    ref.step(zero)
+    assert np.abs(sim.base_lin_vel_w - ref.base_lin_vel_w).max() > 0.01
+    with pytest.raises(ValueError, match="simulator.restitution"):
+        legged("go2", envs=1, simulator={"restitution": [0.5, 0.2]})
+    quad = kestrel.make_simulator({"env": "empty"}, num_envs=2)
+    with pytest.raises(ValueError, match="articulated only"):
+        quad.push_links()
+    assert quad.dr_joint_armature.shape == (2, 0) and np.all(quad.dr_friction_values == -1)
+
+
+def test_terrain_curriculum_from_python():
+    sim = legged("go2", envs=8, seed=2, env={"name": "empty", "num_physics_steps_per_env_step_mean": 4, "terrain": {
+        "type": "heightfield", "procedural": "curriculum", "num_rows": 4, "num_cols": 4, "border_size_m": 2,
+        "max_init_terrain_level": 0}})
+    assert sim.num_terrain_levels == 4
+    np.testing.assert_array_equal(sim.terrain_levels, np.zeros(8))
+    np.testing.assert_array_equal(sim.terrain_types, np.arange(8) // 2)
+    origins = sim.env_origins_w
+    assert origins.shape == (8, 3)
+    assert np.all(np.abs(sim.base_pos_w[:, :2] - origins[:, :2]) <= 1.0)
+    x0 = origins[0, 0]
+    sim.update_terrain_curriculum([0, 1], [True, False], [False, True])
+    assert sim.terrain_levels[0] == 1 and sim.terrain_levels[1] == 0
+    assert origins[0, 0] == pytest.approx(x0 + 8.0)  # one tile along x, in place
+    with pytest.raises(ValueError, match="move_up and move_down"):
+        sim.update_terrain_curriculum([0, 1], [True], [False, False])
+    with pytest.raises(ValueError, match="tiled terrain"):
+        legged("go2", envs=2).update_terrain_curriculum([0], [True], [False])

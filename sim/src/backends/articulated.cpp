@@ -53,6 +53,10 @@ constexpr real kBaseContactThreshold_N = 1;
 constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
 
 struct Worker {
+  // The robot's model with one environment's randomised root-body inertia and joint armatures
+  // written in before its physics step (only when those are randomised): one copy per worker, so
+  // the environments share one model otherwise and never read each other's.
+  RobotMultibody model;
   dy::MultibodyData<kMaxRobotBodies> data;
   Scratch scratch;
   dy::ContactPoint contacts[kMaxContacts];
@@ -99,6 +103,7 @@ class ArticulatedSimulator final : public Simulator {
       if (m.dof_index[b] < 0 || m.joint[b] == dy::JointType::free) continue;
       dof_v_.push_back(m.dof_index[b]);
       dof_q_.push_back(m.q_index[b]);
+      dof_body_.push_back(b);
       effort_.push_back(m.effort_limit[b]);
       home_.push_back(robot_.home_q[static_cast<std::size_t>(m.q_index[b])]);
     }
@@ -132,6 +137,7 @@ class ArticulatedSimulator final : public Simulator {
               ") / joint_kp_scale / joint_kd_scale (min <= max): the joint drive was refused";
       return false;
     }
+    if (!check_randomisation(c, pre, error)) return false;
     for (const RobotGeom& g : robot_.geoms) {
       if (g.body < 0) continue;  // world geometry of the file: the terrain stands for the ground
       dy::CollisionShape s;
@@ -200,9 +206,25 @@ class ArticulatedSimulator final : public Simulator {
     dr_kp_scale_.assign(n, 1);
     dr_kd_scale_.assign(n, 1);
     for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeJointGains);
+    const SimulatorConfig& sc = c.simulator;
+    dr_friction_.assign(n, sc.friction_min == -1 ? -1_r : sc.friction_min);
+    dr_restitution_.assign(n, sc.restitution_min == -1 ? -1_r : sc.restitution_min);
+    dr_armature_.assign(n * dof_v_.size(), 0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < dof_v_.size(); ++j) dr_armature_[i * dof_v_.size() + j] = m.armature[dof_body_[j]];
+    randomise_inertia_ = sc.added_mass_min_kg != 0 || sc.added_mass_max_kg != 0 || sc.com_bias_max_m != 0 ||
+                         sc.joint_armature_min_kg_m2 != -1;
+    randomise_contacts_ = sc.friction_min != -1 || sc.restitution_min != -1;
+    for (int e = 0; e < num_envs_; ++e) {
+      rng_dr_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeDomainRand);
+      rng_link_push_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeLinkPush);
+    }
+    link_push_w_.assign(n * static_cast<std::size_t>(m.num_bodies) * 3, 0);
+    link_push_due_.assign(n, 0);
     stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
+    for (int e = 0; e < num_envs_; ++e) rng_terrain_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeTerrainLevel);
     place_origins();
     if (c.env.terrain.measure_heights) {
       // legged_gym's height points: the x list times the y list, x-major (as the World's).
@@ -222,7 +244,10 @@ class ArticulatedSimulator final : public Simulator {
     }
     const int threads = std::max(1, std::min(c.num_threads, num_envs_));
     pool_ = std::make_unique<ThreadPool>(threads);
-    for (int w = 0; w < threads; ++w) workers_.push_back(std::make_unique<Worker>());
+    for (int w = 0; w < threads; ++w) {
+      workers_.push_back(std::make_unique<Worker>());
+      workers_.back()->model = robot_.multibody;
+    }
     for (int e = 0; e < num_envs_; ++e) reset_env(e, false);
     for (int e = 0; e < num_envs_; ++e) refresh(e, *workers_[0]);
     return true;
@@ -281,6 +306,36 @@ class ArticulatedSimulator final : public Simulator {
     return true;
   }
 
+  bool push_links() override {
+    const real f = cfg_.simulator.max_push_force_N;
+    const std::size_t nb = static_cast<std::size_t>(robot_.multibody.num_bodies);
+    for (int e = 0; e < num_envs_; ++e) {
+      const std::size_t ei = static_cast<std::size_t>(e);
+      RngStream& rng = rng_link_push_[ei];
+      // Three draws per link always, so the stream's position does not depend on the values.
+      for (std::size_t k = 0; k < 3 * nb; ++k) link_push_w_[ei * 3 * nb + k] = rng.uniform(-f, f);
+      link_push_due_[ei] = 1;
+    }
+    return true;
+  }
+
+  bool update_terrain_curriculum(const int* env_ids, int count, const std::uint8_t* move_up, const std::uint8_t* move_down) override {
+    if (num_terrain_levels_ == 0) return Simulator::update_terrain_curriculum(env_ids, count, move_up, move_down);
+    for (int k = 0; k < count; ++k)
+      if (env_ids[k] < 0 || env_ids[k] >= num_envs_)
+        return fail("simulator rigid: update_terrain_curriculum: env id " + std::to_string(env_ids[k]) + " out of range [0, " +
+                    std::to_string(num_envs_) + ")");
+    for (int k = 0; k < count; ++k) {
+      const std::size_t e = static_cast<std::size_t>(env_ids[k]);
+      int level = terrain_levels_[e] + (move_up[k] != 0 ? 1 : 0) - (move_down[k] != 0 && move_up[k] == 0 ? 1 : 0);
+      // legged_gym: robots that solve the last level are sent to a random one; the lowest is 0.
+      if (level >= num_terrain_levels_) level = static_cast<int>(rng_terrain_[e].next_u32() % static_cast<std::uint32_t>(num_terrain_levels_));
+      terrain_levels_[e] = std::max(0, level);
+      set_origin(e, terrain_->tile_origin(terrain_levels_[e], terrain_types_[e]));
+    }
+    return true;
+  }
+
   void update_sensors() override {}
   void set_auto_reset(bool on) override { auto_reset_ = on; }
   // The obstacle curriculum's level: articulated robots have no obstacle slots, so nothing reads
@@ -327,8 +382,8 @@ class ArticulatedSimulator final : public Simulator {
 
   /// The per-physics-step work of one environment (workers run slices of environments).
   void physics_step(int e, Worker& w) {
-    const RobotMultibody& m = robot_.multibody;
     const std::size_t ei = static_cast<std::size_t>(e);
+    const RobotMultibody& m = randomise_inertia_ ? env_model(ei, w) : robot_.multibody;
     real* q = &q_[ei * static_cast<std::size_t>(nq_)];
     real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
     const real* a = &actions_[ei * static_cast<std::size_t>(action_dim_)];
@@ -373,6 +428,15 @@ class ArticulatedSimulator final : public Simulator {
       const int k = dy::collide_halfspace(&s, 1, w.scratch.X_world, ground, kContactMargin_m, w.contacts + found, room,
                                           static_cast<int>(si));
       found += std::min(k, room);
+    }
+    if (randomise_contacts_)
+      for (int k = 0; k < found; ++k) {
+        if (dr_friction_[ei] >= 0) w.contacts[k].friction = dr_friction_[ei];
+        if (dr_restitution_[ei] >= 0) w.contacts[k].restitution = dr_restitution_[ei];
+      }
+    if (link_push_due_[ei] != 0) {
+      add_link_push(ei, m, w, tau);
+      link_push_due_[ei] = 0;
     }
     const Status st = dy::step_constrained(m, w.data, w.scratch, q, qd, tau, cfg_.sim.dt_s, w.contacts, found,
                                            params_, kp, kd, &warm_[ei]);
@@ -506,7 +570,92 @@ class ArticulatedSimulator final : public Simulator {
     g.restitution = 0;
   }
 
+  /// The randomisation ranges (simulator.*) an articulated robot takes: a range is off (-1, -1) or
+  /// 0 <= min <= max (restitution <= 1); the root body keeps a positive mass.
+  bool check_randomisation(const WorldConfig& c, const std::string& pre, std::string& error) const {
+    const SimulatorConfig& sc = c.simulator;
+    const auto range = [&](const char* key, real lo, real hi, real cap) {
+      if (lo == -1 && hi == -1) return true;
+      if (lo >= 0 && lo <= hi && hi <= cap) return true;
+      error = pre + "simulator." + key + ": expected [-1, -1] (not randomised) or [min, max] with 0 <= min <= max <= " +
+              std::to_string(static_cast<double>(cap)) + ", got [" + std::to_string(static_cast<double>(lo)) + ", " +
+              std::to_string(static_cast<double>(hi)) + "]";
+      return false;
+    };
+    if (!range("friction", sc.friction_min, sc.friction_max, 100) || !range("restitution", sc.restitution_min, sc.restitution_max, 1) ||
+        !range("joint_armature_kg_m2", sc.joint_armature_min_kg_m2, sc.joint_armature_max_kg_m2, 1e4))
+      return false;
+    const real m0 = robot_.multibody.body[0].mass;
+    if (!(sc.added_mass_min_kg <= sc.added_mass_max_kg) || !(m0 + sc.added_mass_min_kg > 0)) {
+      error = pre + "simulator.added_mass_kg: expected min <= max and a positive root-body mass (" +
+              std::to_string(static_cast<double>(m0)) + " kg + min)";
+      return false;
+    }
+    if (!(sc.max_push_force_N >= 0) || !std::isfinite(sc.max_push_force_N) || !(sc.com_bias_max_m >= 0)) {
+      error = pre + "simulator.max_push_force_N and com_bias_max_m: expected finite values >= 0";
+      return false;
+    }
+    return true;
+  }
+
+  /// Draws environment ei's randomised values (simulator.*) from its stream, a fixed number of
+  /// draws per kind that is on, so that one kind's values never shift another's.
+  void draw_randomisation(std::size_t ei) {
+    const SimulatorConfig& sc = cfg_.simulator;
+    RngStream& rng = rng_dr_[ei];
+    if (sc.friction_min != -1) dr_friction_[ei] = rng.uniform(sc.friction_min, sc.friction_max);
+    if (sc.restitution_min != -1) dr_restitution_[ei] = rng.uniform(sc.restitution_min, sc.restitution_max);
+    if (sc.added_mass_min_kg != 0 || sc.added_mass_max_kg != 0) added_mass_kg_[ei] = rng.uniform(sc.added_mass_min_kg, sc.added_mass_max_kg);
+    if (sc.com_bias_max_m != 0)
+      for (int k = 0; k < 3; ++k) com_bias_b_m_[3 * ei + static_cast<std::size_t>(k)] = rng.uniform(-sc.com_bias_max_m, sc.com_bias_max_m);
+    if (sc.joint_armature_min_kg_m2 != -1)
+      for (std::size_t j = 0; j < dof_v_.size(); ++j)
+        dr_armature_[ei * dof_v_.size() + j] = rng.uniform(sc.joint_armature_min_kg_m2, sc.joint_armature_max_kg_m2);
+  }
+
+  /// The worker's model with environment ei's root-body mass and centre of mass and joint armatures.
+  const RobotMultibody& env_model(std::size_t ei, Worker& w) const {
+    const RobotMultibody& base = robot_.multibody;
+    w.model.body[0].mass = base.body[0].mass + added_mass_kg_[ei];
+    for (int k = 0; k < 3; ++k) w.model.body[0].com[k] = base.body[0].com[k] + com_bias_b_m_[3 * ei + static_cast<std::size_t>(k)];
+    for (std::size_t j = 0; j < dof_v_.size(); ++j) w.model.armature[dof_body_[j]] = dr_armature_[ei * dof_v_.size() + j];
+    return w.model;
+  }
+
+  /// push_links' forces as joint-space forces: tau += J_b(c_b)^T f_b for every body b, J_b the
+  /// Jacobian of its centre of mass c_b (its linear rows, 0-2), f_b its world-frame force. w.data
+  /// and X_world hold this physics step's kinematics (physics_step computed them for collision).
+  void add_link_push(std::size_t ei, const RobotMultibody& m, Worker& w, real* tau) const {
+    constexpr int kDofs = dy::max_dofs<kMaxRobotBodies>();
+    real J[6 * kDofs];
+    const real* f = &link_push_w_[ei * 3 * static_cast<std::size_t>(m.num_bodies)];
+    for (int b = 0; b < m.num_bodies; ++b) {
+      dy::point_jacobian(m, w.data, w.scratch.X_world, b, m.body[b].com, J, kDofs);
+      for (int c = 0; c < m.num_dofs; ++c)
+        tau[c] += J[c] * f[3 * b] + J[kDofs + c] * f[3 * b + 1] + J[2 * kDofs + c] * f[3 * b + 2];
+    }
+  }
+
+  void set_origin(std::size_t e, const Vec3& o) {
+    origins_[e] = o;
+    for (int k = 0; k < 3; ++k) env_origins_w_[3 * e + static_cast<std::size_t>(k)] = o[k];
+  }
+
   void place_origins() {
+    if (terrain_->tile_rows() > 0) {
+      // legged_gym's custom origins: environment e on terrain type (column) e * cols / envs, at a
+      // level drawn in [0, max_init_terrain_level] (below the top row).
+      const int rows = terrain_->tile_rows(), cols = terrain_->tile_cols();
+      num_terrain_levels_ = rows;
+      const int top = std::min(rows - 1, std::max(0, cfg_.env.terrain.max_init_terrain_level));
+      for (int e = 0; e < num_envs_; ++e) {
+        const std::size_t ei = static_cast<std::size_t>(e);
+        terrain_types_[ei] = static_cast<int>(static_cast<long long>(e) * cols / num_envs_);
+        terrain_levels_[ei] = static_cast<int>(rng_terrain_[ei].next_u32() % static_cast<std::uint32_t>(top + 1));
+        set_origin(ei, terrain_->tile_origin(terrain_levels_[ei], terrain_types_[ei]));
+      }
+      return;
+    }
     // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin).
     const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(num_envs_)))));
     Vec3 centre = Vec3::Zero();
@@ -518,7 +667,7 @@ class ArticulatedSimulator final : public Simulator {
       const real y = (static_cast<real>(e / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
       Vec3 o(centre[0] + x, centre[1] + y, 0);
       o[2] = terrain_->height_at(o[0], o[1]);
-      origins_[static_cast<std::size_t>(e)] = o;
+      set_origin(static_cast<std::size_t>(e), o);
     }
   }
 
@@ -534,12 +683,20 @@ class ArticulatedSimulator final : public Simulator {
       q[0] += origins_[ei][0];
       q[1] += origins_[ei][1];
       q[2] += origins_[ei][2];
+      if (num_terrain_levels_ > 0) {
+        // legged_gym's _reset_root_states with custom origins: x and y within +-1 m of the tile's
+        // centre (its central 2 m x 2 m, whose highest point the origin's height is).
+        q[0] += rng_terrain_[ei].uniform(-1, 1);
+        q[1] += rng_terrain_[ei].uniform(-1, 1);
+      }
     }
     episode_step_[ei] = 0;
     warm_[ei].count = 0;
     joint_pd_reset(drive_, drive_state_[ei], rng_gains_[ei]);
     dr_kp_scale_[ei] = drive_state_[ei].scales.kp_scale;
     dr_kd_scale_[ei] = drive_state_[ei].scales.kd_scale;
+    draw_randomisation(ei);
+    link_push_due_[ei] = 0;
     std::fill(link_forces_w_.begin() + static_cast<long>(ei * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3),
               link_forces_w_.begin() + static_cast<long>((ei + 1) * static_cast<std::size_t>(robot_.multibody.num_bodies) * 3), 0_r);
     std::fill(torques_.begin() + static_cast<long>(ei * dof_v_.size()), torques_.begin() + static_cast<long>((ei + 1) * dof_v_.size()), 0_r);
@@ -551,6 +708,12 @@ class ArticulatedSimulator final : public Simulator {
   ArticulatedRobot robot_;
   bool floating_ = false;
   std::vector<int> dof_v_, dof_q_;  // per actuated joint: its velocity and configuration coordinate
+  std::vector<int> dof_body_;       // per actuated joint: its body
+  bool randomise_inertia_ = false;  // added base mass, centre-of-mass bias or joint armature drawn
+  bool randomise_contacts_ = false; // friction or restitution drawn
+  std::vector<RngStream> rng_dr_, rng_link_push_, rng_terrain_;  // (envs)
+  std::vector<real> link_push_w_;         // (envs x links x 3) N: push_links' pending forces
+  std::vector<std::uint8_t> link_push_due_;  // (envs) pending forces to apply at the next physics step
   std::vector<real> effort_, home_;
   Drive drive_;                          // the core's joint PD, one parameter set for every robot
   std::vector<DriveState> drive_state_;  // (envs) its delay line, gain scales, held torques

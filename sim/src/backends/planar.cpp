@@ -240,6 +240,9 @@ bool validate_planar_config(const WorldConfig& c, std::string& error) {
       !(sc.motor_scale_min <= sc.motor_scale_max) || !(sc.gain_scale_min > 0) || !(sc.gain_scale_min <= sc.gain_scale_max) ||
       !(sc.com_bias_max_m >= 0) || !(c.robot.mass_kg + sc.added_mass_min_kg > 0))
     return fail("simulator: randomisation ranges need min <= max, scales > 0, com_bias_max_m >= 0 and a positive total mass");
+  if (articulated_only_randomisation(sc))
+    return fail("simulator.friction, restitution, joint_armature_kg_m2 and max_push_force_N randomise articulated robots; "
+                "use simulator: rigid with an articulated robot (robot: go2)");
   if (sc.lidar_beams < 0 || sc.lidar_beams > 4096 || !(sc.lidar_max_range_m > 0) || !(sc.lidar_fov_rad > 0 && sc.lidar_fov_rad <= kTwoPi))
     return fail("simulator.lidar_*: expected 0..4096 beams, a positive range and a field of view in (0, 2 pi]");
   // Upper bounds of every count (sim/limits.hpp) and the memory estimate, before allocating.

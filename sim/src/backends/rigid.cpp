@@ -32,6 +32,11 @@ class RigidSimulator final : public Simulator {
               "controller.randomize_gains); use simulator: planar";
       return false;
     }
+    if (articulated_only_randomisation(config.simulator)) {
+      error = "simulator rigid: simulator.friction, restitution, joint_armature_kg_m2 and max_push_force_N randomise "
+              "articulated robots (robot kind articulated); the multirotor's contacts take sim.friction_coefficient";
+      return false;
+    }
     if (config.simulator.lidar_beams != 0) {
       error = "simulator rigid: simulator.lidar_beams is the planar 2-D lidar; on rigid attach a lidar through `sensors:`";
       return false;

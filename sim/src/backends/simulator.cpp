@@ -62,6 +62,11 @@ std::unique_ptr<Simulator> make_simulator(const WorldConfig& config, std::string
 
 Simulator::~Simulator() = default;
 
+bool articulated_only_randomisation(const SimulatorConfig& sc) {
+  return sc.friction_min != -1 || sc.friction_max != -1 || sc.restitution_min != -1 || sc.restitution_max != -1 ||
+         sc.joint_armature_min_kg_m2 != -1 || sc.joint_armature_max_kg_m2 != -1 || sc.max_push_force_N != 0;
+}
+
 void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar_beams) {
   cfg_ = cfg;
   num_envs_ = cfg.env.num_envs;
@@ -84,6 +89,12 @@ void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar
   reset_buf_.assign(static_cast<std::size_t>(num_envs_), 0);
   added_mass_kg_.assign(n, 0);
   com_bias_b_m_.assign(3 * n, 0);
+  dr_friction_.assign(n, -1);     // not randomised (articulated robots' set-up draws them)
+  dr_restitution_.assign(n, -1);
+  dr_armature_.clear();           // (robots x 0) without joints
+  terrain_levels_.assign(static_cast<std::size_t>(num_envs_), 0);
+  terrain_types_.assign(static_cast<std::size_t>(num_envs_), 0);
+  env_origins_w_.assign(3 * static_cast<std::size_t>(num_envs_), 0);
   motor_scale_.assign(n, 1);
   gain_scale_.assign(n, 1);
   lidar_.assign(n * static_cast<std::size_t>(lidar_beams), 0);

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -289,6 +290,18 @@ void parse_terrain(const YAML::Node& n, TerrainConfig& t, const std::string& dir
     std::istringstream ns(names);
     for (std::string w; std::getline(ns, w, ',');) known = known || (w.substr(w.find_first_not_of(' ')) == t.procedural);
     if (!known) bad(f + ".procedural", "unknown generator \"" + t.procedural + "\"; allowed: " + names);
+  }
+  if (n["terrain_proportions"]) {
+    t.terrain_proportions = get_real_list(n["terrain_proportions"], f + ".terrain_proportions");
+    double sum = 0;
+    bool ok = t.terrain_proportions.size() == 5;
+    for (real v : t.terrain_proportions) {
+      ok = ok && v >= 0 && std::isfinite(v);
+      sum += static_cast<double>(v);
+    }
+    if (!ok || !(sum > 0))
+      bad(f + ".terrain_proportions",
+          "expected 5 numbers >= 0 with a positive sum: smooth slope, rough slope, stairs up, stairs down, discrete obstacles");
   }
   for (const char* k : {"measured_points_x_m", "measured_points_x"})
     if (n[k]) t.measured_points_x_m = get_real_list(n[k], f + "." + k);

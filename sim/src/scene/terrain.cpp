@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 
 #include "kestrel/kernel/quaternion.hpp"
@@ -263,9 +264,117 @@ void merge_contact(const Contact& k, Contact* out, int& count) {
   out[count++] = k;
 }
 
+
+// A rectangle of a height array: samples [i0, i0 + w) along x by [j0, j0 + l) along y of a grid nx
+// samples wide, spacing hs. The generators below write one tile (the whole grid is one tile).
+struct Tile {
+  real* h;
+  int nx, i0, j0, w, l;
+  real hs;
+  real& at(int i, int j) const { return h[static_cast<std::size_t>(j0 + j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i0 + i)]; }
+};
+
+// terrain_utils.pyramid_sloped_terrain: max_height * xx * yy with xx, yy the normalised distances
+// from the border (1 at the centre) over an extent ex x ey (m), clipped to the height at the
+// platform's edge.
+void tile_pyramid_slope(const Tile& t, real ex, real ey, real slope, real platform_m) {
+  const real cx = ex / 2, cy = ey / 2, max_h = slope * cx;
+  auto raw = [&](real x, real y) { return max_h * ((cx - std::fabs(cx - x)) / cx) * ((cy - std::fabs(cy - y)) / cy); };
+  const real edge = raw(cx - platform_m / 2, cy - platform_m / 2);
+  const real lo = std::min(edge, 0_r), hi = std::max(edge, 0_r);
+  for (int j = 0; j < t.l; ++j)
+    for (int i = 0; i < t.w; ++i) t.at(i, j) = std::min(hi, std::max(lo, raw(static_cast<real>(i) * t.hs, static_cast<real>(j) * t.hs)));
+}
+
+// terrain_utils.pyramid_stairs_terrain: nested rectangles, each step_width narrower per side and
+// step_height higher (negative: a pit of stairs), until the platform remains. Widths in samples.
+void tile_pyramid_stairs(const Tile& t, int step_w, int platform, real step_height_m) {
+  int x0 = 0, x1 = t.w, y0 = 0, y1 = t.l;
+  real height = 0;
+  while (x1 - x0 > platform && y1 - y0 > platform) {
+    x0 += step_w;
+    x1 -= step_w;
+    y0 += step_w;
+    y1 -= step_w;
+    height += step_height_m;
+    for (int j = std::max(0, y0); j < std::min(t.l, y1); ++j)
+      for (int i = std::max(0, x0); i < std::min(t.w, x1); ++i) t.at(i, j) = height;
+  }
+}
+
+// terrain_utils.random_uniform_terrain: heights drawn from {min, min + step, ..., max} on a grid of
+// `down` spacing over the extent ex x ey, linearly interpolated to the samples; written (add
+// false) or added to what the tile holds (add true: legged_gym's rough slope).
+void tile_random_uniform(const Tile& t, real ex, real ey, real min_h, real max_h, real step_h, real down, RngStream& rng,
+                         bool add) {
+  const int levels = static_cast<int>(std::floor((max_h - min_h) / step_h + 1e-4_r)) + 1;
+  const int cnx = std::max(2, static_cast<int>(ex / down)), cny = std::max(2, static_cast<int>(ey / down));
+  std::vector<real> coarse(static_cast<std::size_t>(cnx) * static_cast<std::size_t>(cny));
+  for (real& v : coarse) v = min_h + step_h * static_cast<real>(rng.next_u32() % static_cast<std::uint32_t>(levels));
+  for (int j = 0; j < t.l; ++j)
+    for (int i = 0; i < t.w; ++i) {
+      const real u = static_cast<real>(i) / static_cast<real>(t.w - 1) * static_cast<real>(cnx - 1);
+      const real v = static_cast<real>(j) / static_cast<real>(t.l - 1) * static_cast<real>(cny - 1);
+      const int ci = std::min(cnx - 2, static_cast<int>(u)), cj = std::min(cny - 2, static_cast<int>(v));
+      const real fu = u - static_cast<real>(ci), fv = v - static_cast<real>(cj);
+      auto cc = [&](int a, int b) { return coarse[static_cast<std::size_t>(b) * cnx + a]; };
+      const real z = (1 - fv) * ((1 - fu) * cc(ci, cj) + fu * cc(ci + 1, cj)) + fv * ((1 - fu) * cc(ci, cj + 1) + fu * cc(ci + 1, cj + 1));
+      if (add) {
+        t.at(i, j) += z;
+      } else {
+        t.at(i, j) = z;
+      }
+    }
+}
+
+// terrain_utils.discrete_obstacles_terrain: num_rects rectangles with sides drawn from
+// {min, min + 4, ...} < max samples, at corners on a 4-sample lattice, each raised or sunk by one of
+// {-h, -h/2, h/2, h}; then the central platform is levelled to 0.
+void tile_discrete_obstacles(const Tile& t, real height_m, int min_size, int max_size, int num_rects, int platform, RngStream& rng) {
+  const real heights[4] = {-height_m, -height_m / 2, height_m / 2, height_m};
+  const auto pick = [&rng](int lo, int hi) {  // one of lo, lo + 4, ... < hi (lo when the range is empty)
+    const int count = hi > lo ? (hi - lo + 3) / 4 : 1;
+    return lo + 4 * static_cast<int>(rng.next_u32() % static_cast<std::uint32_t>(count));
+  };
+  for (int r = 0; r < num_rects; ++r) {
+    const int sw = pick(min_size, max_size), sl = pick(min_size, max_size);
+    const int i0 = pick(0, t.w - sw), j0 = pick(0, t.l - sl);
+    const real z = heights[rng.next_u32() % 4u];
+    for (int j = j0; j < std::min(t.l, j0 + sl); ++j)
+      for (int i = i0; i < std::min(t.w, i0 + sw); ++i) t.at(i, j) = z;
+  }
+  for (int j = (t.l - platform) / 2; j < (t.l + platform) / 2; ++j)
+    for (int i = (t.w - platform) / 2; i < (t.w + platform) / 2; ++i) t.at(i, j) = 0;
+}
+
+// legged_gym's make_terrain(choice, difficulty) on one tile (extent ex x ey): the type by the
+// cumulative proportions p (smooth slope, rough slope, stairs up, stairs down, discrete
+// obstacles; flat past the last), the size of its features by the difficulty in [0, 1].
+void make_tile(const Tile& t, real ex, real ey, real choice, real difficulty, const real* p, RngStream& rng) {
+  real slope = difficulty * 0.4_r;
+  real step_height = 0.05_r + 0.18_r * difficulty;
+  const real obstacle_height = 0.05_r + difficulty * 0.2_r;
+  const int platform = static_cast<int>(std::floor(3 / t.hs + 1e-4_r));  // 3 m, legged_gym's platform_size
+  if (choice < p[0]) {
+    if (choice < p[0] / 2) slope = -slope;
+    tile_pyramid_slope(t, ex, ey, slope, 3);
+  } else if (choice < p[1]) {
+    tile_pyramid_slope(t, ex, ey, slope, 3);
+    tile_random_uniform(t, ex, ey, -0.05_r, 0.05_r, 0.005_r, 0.2_r, rng, true);
+  } else if (choice < p[3]) {
+    if (choice < p[2]) step_height = -step_height;  // a pit: the robot climbs up out of it
+    tile_pyramid_stairs(t, static_cast<int>(std::floor(0.31_r / t.hs + 1e-4_r)), platform, step_height);
+  } else if (choice < p[4]) {
+    tile_discrete_obstacles(t, obstacle_height, static_cast<int>(std::floor(1 / t.hs + 1e-4_r)),
+                            static_cast<int>(std::floor(2 / t.hs + 1e-4_r)), 20, platform, rng);
+  }
+}
+
 }  // namespace
 
-const char* terrain_procedural_names() { return "flat, slope, pyramid_slope, stairs, pyramid_stairs, random_uniform, wave"; }
+const char* terrain_procedural_names() {
+  return "flat, slope, pyramid_slope, stairs, pyramid_stairs, random_uniform, wave, curriculum, randomized";
+}
 
 bool Terrain::build(const TerrainConfig& config, std::uint64_t seed, std::unique_ptr<Terrain>& out, std::string& error) {
   std::unique_ptr<Terrain> t(new Terrain());
@@ -318,30 +427,72 @@ bool Terrain::build_heightfield(const TerrainConfig& c, std::uint64_t seed, std:
       for (int i = 0; i < nx; ++i)
         h[static_cast<std::size_t>(j) * nx + i] = static_cast<real>(px[static_cast<std::size_t>(ny - 1 - j) * nx + i] * c.vertical_scale_m);
   } else {
-    if (!(c.length_x_m >= hs) || !(c.width_y_m >= hs)) return fail("length_x_m", "expected length_x_m and width_y_m >= horizontal_scale_m");
-    nx = static_cast<int>(std::floor(c.length_x_m / hs + 0.5_r)) + 1;
-    ny = static_cast<int>(std::floor(c.width_y_m / hs + 0.5_r)) + 1;
+    const bool tiled = c.procedural == "curriculum" || c.procedural == "randomized";
+    int tile_w = 0, tile_l = 0, border = 0;  // samples
+    if (tiled) {
+      // legged_gym's Terrain: rows of tiles along x (levels), columns along y (types), a border.
+      if (!(c.tile_length_m >= 4) || !(c.tile_width_m >= 4))
+        return fail("tile_length_m", "expected tile_length_m and tile_width_m >= 4 m (a 3 m platform at each tile's centre)");
+      if (c.terrain_proportions.size() != 5) return fail("terrain_proportions", "expected 5 numbers");
+      tile_w = static_cast<int>(std::floor(c.tile_length_m / hs + 1e-4_r));
+      tile_l = static_cast<int>(std::floor(c.tile_width_m / hs + 1e-4_r));
+      border = static_cast<int>(std::floor(c.border_size_m / hs + 1e-4_r));
+      nx = c.num_rows * tile_w + 2 * border;
+      ny = c.num_cols * tile_l + 2 * border;
+    } else {
+      if (!(c.length_x_m >= hs) || !(c.width_y_m >= hs)) return fail("length_x_m", "expected length_x_m and width_y_m >= horizontal_scale_m");
+      nx = static_cast<int>(std::floor(c.length_x_m / hs + 0.5_r)) + 1;
+      ny = static_cast<int>(std::floor(c.width_y_m / hs + 0.5_r)) + 1;
+    }
     if (static_cast<long long>(nx) * ny > kMaxHeightmapSamples)
       return fail("length_x_m", "grid of " + std::to_string(static_cast<long long>(nx) * ny) + " samples; allowed: at most " +
                                     std::to_string(kMaxHeightmapSamples) + " (kMaxHeightmapSamples, sim/limits.hpp)");
     const real lx = static_cast<real>(nx - 1) * hs, ly = static_cast<real>(ny - 1) * hs;
     h.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
     auto at = [&](int i, int j) -> real& { return h[static_cast<std::size_t>(j) * nx + i]; };
+    const Tile whole{h.data(), nx, 0, 0, nx, ny, hs};
     const std::string& p = c.procedural;
-    if (p == "flat") {
+    if (tiled) {
+      // Cumulative proportions, normalised (legged_gym expects them to sum to 1).
+      real cum[5], total = 0;
+      for (real v : c.terrain_proportions) total += v;
+      real run = 0;
+      for (int k = 0; k < 5; ++k) cum[k] = (run += c.terrain_proportions[static_cast<std::size_t>(k)]) / total;
+      RngStream rng(seed, 0, kPurposeTerrain);
+      tile_rows_ = c.num_rows;
+      tile_cols_ = c.num_cols;
+      tile_origins_.assign(static_cast<std::size_t>(tile_rows_) * static_cast<std::size_t>(tile_cols_), Vec3::Zero());
+      const real ex = static_cast<real>(tile_w) * hs, ey = static_cast<real>(tile_l) * hs;
+      static constexpr real kRandomDifficulties[3] = {0.5_r, 0.75_r, 0.9_r};  // randomized_terrain's
+      for (int j = 0; j < c.num_cols; ++j)
+        for (int i = 0; i < c.num_rows; ++i) {
+          real choice, difficulty;
+          if (p == "curriculum") {
+            difficulty = static_cast<real>(i) / static_cast<real>(c.num_rows);
+            choice = static_cast<real>(j) / static_cast<real>(c.num_cols) + 0.001_r;
+          } else {
+            choice = rng.uniform();
+            difficulty = kRandomDifficulties[rng.next_u32() % 3u];
+          }
+          const Tile t{h.data(), nx, border + i * tile_w, border + j * tile_l, tile_w, tile_l, hs};
+          make_tile(t, ex, ey, choice, difficulty, cum, rng);
+          // The tile's origin: its centre, at the highest surface of the central 2 m x 2 m (local
+          // sample coordinates here; moved into the world below).
+          real top = -std::numeric_limits<real>::infinity();
+          const int x1 = static_cast<int>((ex / 2 - 1) / hs), x2 = static_cast<int>((ex / 2 + 1) / hs);
+          const int y1 = static_cast<int>((ey / 2 - 1) / hs), y2 = static_cast<int>((ey / 2 + 1) / hs);
+          for (int b = y1; b < y2; ++b)
+            for (int a = x1; a < x2; ++a) top = std::max(top, t.at(a, b));
+          tile_origins_[static_cast<std::size_t>(i * c.num_cols + j)] =
+              Vec3((static_cast<real>(t.i0) + static_cast<real>(tile_w) / 2) * hs, (static_cast<real>(t.j0) + static_cast<real>(tile_l) / 2) * hs, top);
+        }
+    } else if (p == "flat") {
     } else if (p == "slope") {
       // terrain_utils.sloped_terrain: rises along x by `slope` per metre.
       for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) at(i, j) = c.slope * static_cast<real>(i) * hs;
     } else if (p == "pyramid_slope") {
-      // terrain_utils.pyramid_sloped_terrain: max_height * xx * yy with xx, yy the normalised
-      // distances from the border (1 at the centre), clipped to the height at the platform's edge.
-      const real cx = lx / 2, cy = ly / 2, max_h = c.slope * cx;
-      auto raw = [&](real x, real y) { return max_h * ((cx - std::fabs(cx - x)) / cx) * ((cy - std::fabs(cy - y)) / cy); };
-      const real edge = raw(cx - c.platform_size_m / 2, cy - c.platform_size_m / 2);
-      const real lo = std::min(edge, 0_r), hi = std::max(edge, 0_r);
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) at(i, j) = std::min(hi, std::max(lo, raw(static_cast<real>(i) * hs, static_cast<real>(j) * hs)));
+      tile_pyramid_slope(whole, lx, ly, c.slope, c.platform_size_m);
     } else if (p == "stairs") {
       // terrain_utils.stairs_terrain: step k (along x, width step_width_m) at (k + 1) step_height_m.
       if (!(c.step_width_m >= hs)) return fail("step_width_m", "expected a number >= horizontal_scale_m");
@@ -349,42 +500,17 @@ bool Terrain::build_heightfield(const TerrainConfig& c, std::uint64_t seed, std:
       for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) at(i, j) = static_cast<real>(i / w + 1) * c.step_height_m;
     } else if (p == "pyramid_stairs") {
-      // terrain_utils.pyramid_stairs_terrain: nested rectangles, each step_width_m narrower per
-      // side and step_height_m higher, until the platform remains.
       if (!(c.step_width_m >= hs)) return fail("step_width_m", "expected a number >= horizontal_scale_m");
-      const int w = static_cast<int>(std::floor(c.step_width_m / hs + 1e-4_r));
-      const int plat = static_cast<int>(std::floor(c.platform_size_m / hs + 1e-4_r));
-      int x0 = 0, x1 = nx, y0 = 0, y1 = ny;
-      real height = 0;
-      while (x1 - x0 > plat && y1 - y0 > plat) {
-        x0 += w;
-        x1 -= w;
-        y0 += w;
-        y1 -= w;
-        height += c.step_height_m;
-        for (int j = std::max(0, y0); j < std::min(ny, y1); ++j)
-          for (int i = std::max(0, x0); i < std::min(nx, x1); ++i) at(i, j) = height;
-      }
+      tile_pyramid_stairs(whole, static_cast<int>(std::floor(c.step_width_m / hs + 1e-4_r)),
+                          static_cast<int>(std::floor(c.platform_size_m / hs + 1e-4_r)), c.step_height_m);
     } else if (p == "random_uniform") {
       // terrain_utils.random_uniform_terrain: heights drawn from {min, min + step, ..., max} on a
       // grid of downsampled_scale_m spacing, linearly interpolated to the samples.
       if (!(c.height_step_m > 0) || !(c.max_height_m >= c.min_height_m))
         return fail("height_step_m", "expected height_step_m > 0 and max_height_m >= min_height_m");
       if (!(c.downsampled_scale_m > 0)) return fail("downsampled_scale_m", "expected a positive number");
-      const int levels = static_cast<int>(std::floor((c.max_height_m - c.min_height_m) / c.height_step_m + 1e-4_r)) + 1;
-      const int cnx = std::max(2, static_cast<int>(lx / c.downsampled_scale_m)), cny = std::max(2, static_cast<int>(ly / c.downsampled_scale_m));
       RngStream rng(seed, 0, kPurposeTerrain);
-      std::vector<real> coarse(static_cast<std::size_t>(cnx) * static_cast<std::size_t>(cny));
-      for (real& v : coarse) v = c.min_height_m + c.height_step_m * static_cast<real>(rng.next_u32() % static_cast<std::uint32_t>(levels));
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-          const real u = static_cast<real>(i) / static_cast<real>(nx - 1) * static_cast<real>(cnx - 1);
-          const real v = static_cast<real>(j) / static_cast<real>(ny - 1) * static_cast<real>(cny - 1);
-          const int ci = std::min(cnx - 2, static_cast<int>(u)), cj = std::min(cny - 2, static_cast<int>(v));
-          const real fu = u - static_cast<real>(ci), fv = v - static_cast<real>(cj);
-          auto cc = [&](int a, int b) { return coarse[static_cast<std::size_t>(b) * cnx + a]; };
-          at(i, j) = (1 - fv) * ((1 - fu) * cc(ci, cj) + fu * cc(ci + 1, cj)) + fv * ((1 - fu) * cc(ci, cj + 1) + fu * cc(ci + 1, cj + 1));
-        }
+      tile_random_uniform(whole, lx, ly, c.min_height_m, c.max_height_m, c.height_step_m, c.downsampled_scale_m, rng, false);
     } else if (p == "wave") {
       // terrain_utils.wave_terrain: amplitude (cos(y / div) + sin(x / div)), num_waves periods over the width.
       if (c.num_waves < 1) return fail("num_waves", "expected a positive integer");
@@ -405,6 +531,7 @@ bool Terrain::build_heightfield(const TerrainConfig& c, std::uint64_t seed, std:
   hf_.dx = hf_.dy = hs;
   if (sensors::height_field_prepare(hf_) != Status::ok) return fail("heights_m", "invalid height field");
   scene_position_w_ = Vec3(c.origin_m[0] - static_cast<real>(nx - 1) * hs / 2, c.origin_m[1] - static_cast<real>(ny - 1) * hs / 2, c.origin_m[2]);
+  for (Vec3& o : tile_origins_) o += scene_position_w_;
   return true;
 }
 

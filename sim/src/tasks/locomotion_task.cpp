@@ -211,6 +211,10 @@ class LocomotionTask final : public Task {
     }
     resample_steps_ = std::max(1, static_cast<int>(c.resampling_time_s / static_cast<real>(dt_)));
     push_steps_ = std::max(1, static_cast<int>(std::ceil(c.push_interval_s / static_cast<real>(dt_))));
+    link_push_steps_ = c.push_links_interval_s > 0 ? std::max(1, static_cast<int>(std::ceil(c.push_links_interval_s / static_cast<real>(dt_)))) : 0;
+    curriculum_ = c.terrain_curriculum && sim.num_terrain_levels() > 0;
+    half_tile_m_ = static_cast<float>(sim.config().env.terrain.tile_length_m) / 2;
+    episode_s_ = static_cast<float>(len_) * dt_;
     commands_.assign(n * 4, 0.0f);
     actions_.assign(n * nd, 0.0f);
     last_actions_.assign(n * nd, 0.0f);
@@ -261,6 +265,8 @@ class LocomotionTask final : public Task {
     }
     // legged_gym pushes in _post_physics_step_callback, before the rewards read the velocities.
     if (push) sim_->push_robots();
+    // LeggedGym-Ex's push_links: the forces act during the next step's first physics step.
+    if (link_push_steps_ > 0 && common_step_ % static_cast<std::uint64_t>(link_push_steps_) == 0) (void)sim_->push_links();
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
       const bool crash = sim_->crashed()[i] != 0;
@@ -290,6 +296,7 @@ class LocomotionTask final : public Task {
         for (int k = 0; k < kNumLocoTerms; ++k) term_sums_[static_cast<std::size_t>(k)] += episode_terms_[i * kNumLocoTerms + static_cast<std::size_t>(k)];
       }
     }
+    if (curriculum_) update_curriculum();
     reset_ended();
     for (int env = 0; env < num_envs_; ++env) write_obs(env);
   }
@@ -301,6 +308,27 @@ class LocomotionTask final : public Task {
   }
 
  private:
+  /// legged_gym's _update_terrain_curriculum for the environments whose episode ended: up a level
+  /// after walking farther than half a tile from the origin, down after walking less than half of
+  /// what the command asked over a whole episode (and not up).
+  void update_curriculum() {
+    const real* p = sim_->base_pos_w();
+    const real* o = sim_->env_origins_w();
+    for (int env = 0; env < num_envs_; ++env) {
+      const std::size_t i = static_cast<std::size_t>(env);
+      if (!ended_[i]) continue;
+      const float dx = static_cast<float>(p[3 * i] - o[3 * i]), dy = static_cast<float>(p[3 * i + 1] - o[3 * i + 1]);
+      const float dist = std::sqrt(dx * dx + dy * dy);
+      const float* cmd = &commands_[i * 4];
+      const std::uint8_t up = dist > half_tile_m_ ? 1 : 0;
+      const std::uint8_t down = up == 0 && dist < std::sqrt(cmd[0] * cmd[0] + cmd[1] * cmd[1]) * episode_s_ * 0.5f ? 1 : 0;
+      (void)sim_->update_terrain_curriculum(&env, 1, &up, &down);
+    }
+    double sum = 0;
+    for (int env = 0; env < num_envs_; ++env) sum += sim_->terrain_levels()[env];
+    infos_.mean_terrain_level = sum / num_envs_;
+  }
+
   float heading(int env) const {
     const real* q = sim_->base_quat_xyzw() + 4 * static_cast<std::size_t>(env);
     const Vec3 fwd = rotate(quat_from_xyzw(q), Vec3::UnitX());
@@ -445,7 +473,9 @@ class LocomotionTask final : public Task {
   LocomotionConfig c_;
   int nd_ = 0, nf_ = 0, nh_ = 0;
   float dt_ = 0.02f;
-  int resample_steps_ = 500, push_steps_ = 750;
+  int resample_steps_ = 500, push_steps_ = 750, link_push_steps_ = 0;
+  bool curriculum_ = false;        // terrain curriculum on (task.locomotion.terrain_curriculum and a tiled terrain)
+  float half_tile_m_ = 4, episode_s_ = 20;
   std::uint64_t common_step_ = 0;
   std::vector<float> default_, lower_, upper_, tlim_, noise_;
   std::vector<int> penalized_;
@@ -569,22 +599,21 @@ void register_locomotion_builtins(Registries& r) {
     e.num_physics_steps_per_env_step_mean = 4;
     return e;
   });
-  r.envs.add("legged_rough", "legged_gym's random_uniform rough ground (+-3 cm, 40 x 40 m), decimation 4, the 187 height points", [] {
-    EnvConfig e;
-    e.name = "legged_rough";
-    e.num_physics_steps_per_env_step_mean = 4;
-    e.terrain.type = TerrainType::heightfield;
-    e.terrain.procedural = "random_uniform";
-    e.terrain.length_x_m = 40;
-    e.terrain.width_y_m = 40;
-    e.terrain.horizontal_scale_m = 0.1_r;
-    e.terrain.min_height_m = -0.03_r;
-    e.terrain.max_height_m = 0.03_r;
-    e.terrain.height_step_m = 0.005_r;
-    e.terrain.downsampled_scale_m = 0.25_r;
-    e.terrain.measure_heights = true;
-    return e;
-  });
+  // legged_gym's rough terrain (terrain.py with LeggedRobotCfg.terrain: curriculum over 10 levels x
+  // 20 types of 8 m x 8 m tiles in a 25 m border, start levels up to 5, the 187 height points).
+  r.envs.add("legged_rough",
+             "legged_gym's rough terrain: 10 levels x 20 types of 8 m tiles (slopes, rough slopes, stairs up/down, discrete "
+             "obstacles) with the terrain curriculum, decimation 4, the 187 height points",
+             [] {
+               EnvConfig e;
+               e.name = "legged_rough";
+               e.num_physics_steps_per_env_step_mean = 4;
+               e.terrain.type = TerrainType::heightfield;
+               e.terrain.procedural = "curriculum";
+               e.terrain.horizontal_scale_m = 0.1_r;
+               e.terrain.measure_heights = true;
+               return e;
+             });
 }
 
 TaskDefaults locomotion_task_defaults() {

@@ -15,6 +15,7 @@
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
+#include "kestrel/sim/terrain.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -365,4 +366,344 @@ TEST(Articulated, MeasuredHeightsFollowTheTerrainAroundTheBase) {
   ASSERT_TRUE(flat) << err;
   EXPECT_EQ(flat->num_height_points(), 0);
   EXPECT_EQ(flat->measured_heights(), nullptr);
+}
+
+namespace {
+
+// Every randomisation of simulator.* on (legged_gym's / LeggedGym-Ex's domain_rand ranges).
+void randomise_all(WorldConfig& c) {
+  c.simulator.friction_min = 0.5_r;
+  c.simulator.friction_max = 1.25_r;
+  c.simulator.restitution_min = 0;
+  c.simulator.restitution_max = 0.5_r;
+  c.simulator.added_mass_min_kg = -1;
+  c.simulator.added_mass_max_kg = 3;
+  c.simulator.com_bias_max_m = 0.05_r;
+  c.simulator.joint_armature_min_kg_m2 = 0.005_r;
+  c.simulator.joint_armature_max_kg_m2 = 0.02_r;
+  c.simulator.max_push_force_N = 30;
+}
+
+// Sum of the ground's vertical force on the feet that sit ahead of the base (body x > 0 at home),
+// as a share of all the feet's.
+double front_share(const Simulator& sim, int robot) {
+  const RobotLayout& l = sim.robot_layout();
+  const real* lf = sim.link_contact_forces_w() + static_cast<std::ptrdiff_t>(robot) * sim.num_links() * 3;
+  const real* fp = sim.feet_pos_w() + static_cast<std::ptrdiff_t>(robot) * sim.num_feet() * 3;
+  const real bx = sim.base_pos_w()[3 * robot];
+  double front = 0, all = 0;
+  for (int f = 0; f < sim.num_feet(); ++f) {
+    const double fz = lf[3 * l.foot_links[static_cast<std::size_t>(f)] + 2];
+    all += fz;
+    if (fp[3 * f] > bx) front += fz;
+  }
+  return all > 0 ? front / all : 0;
+}
+
+}  // namespace
+
+TEST(Articulated, DomainRandomisationViewsAreDrawnPerRobotWithinTheirRanges) {
+  WorldConfig c = legged("go2", 6);
+  randomise_all(c);
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  const int n = 6, nd = sim->num_dofs();
+  auto in = [](real v, real lo, real hi) { return v >= lo && v <= hi; };
+  for (int i = 0; i < n; ++i) {
+    EXPECT_TRUE(in(sim->dr_friction_values()[i], 0.5_r, 1.25_r));
+    EXPECT_TRUE(in(sim->dr_restitution_values()[i], 0, 0.5_r));
+    EXPECT_TRUE(in(sim->added_mass_kg()[i], -1, 3));
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(in(sim->com_bias_b_m()[3 * i + k], -0.05_r, 0.05_r));
+    for (int j = 0; j < nd; ++j) EXPECT_TRUE(in(sim->dr_joint_armature()[i * nd + j], 0.005_r, 0.02_r));
+  }
+  EXPECT_NE(sim->dr_friction_values()[0], sim->dr_friction_values()[1]);  // drawn per robot
+  EXPECT_NE(sim->added_mass_kg()[0], sim->added_mass_kg()[1]);
+  EXPECT_NE(sim->dr_joint_armature()[0], sim->dr_joint_armature()[1]);    // and per joint
+  const std::vector<real> mu(sim->dr_friction_values(), sim->dr_friction_values() + n);
+  const std::vector<real> dm(sim->added_mass_kg(), sim->added_mass_kg() + n);
+  const int env = 2;
+  sim->reset_idx(&env, 1);
+  EXPECT_NE(sim->dr_friction_values()[2], mu[2]);  // redrawn at the reset
+  EXPECT_NE(sim->added_mass_kg()[2], dm[2]);
+  EXPECT_EQ(sim->dr_friction_values()[3], mu[3]);  // the others kept
+  EXPECT_EQ(sim->added_mass_kg()[3], dm[3]);
+
+  // Off by default: -1 for the contact values, no added mass or bias, the file's armature.
+  std::unique_ptr<Simulator> plain = make_simulator(legged("go2", 2), err);
+  ASSERT_TRUE(plain) << err;
+  ArticulatedRobot r;
+  ASSERT_TRUE(load_robot_model(plain->config().robot.model_file, r, err));
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(plain->dr_friction_values()[i], -1);
+    EXPECT_EQ(plain->dr_restitution_values()[i], -1);
+    EXPECT_EQ(plain->added_mass_kg()[i], 0);
+    const real arm = plain->config().robot.joint_armature_kg_m2;
+    for (int j = 0; j < nd; ++j) {
+      if (arm >= 0) {
+        EXPECT_EQ(plain->dr_joint_armature()[i * nd + j], arm);
+      } else {
+        EXPECT_GE(plain->dr_joint_armature()[i * nd + j], 0);
+      }
+    }
+  }
+
+  // Refusals name the field and the allowed values; other robots refuse the articulated-only ones.
+  WorldConfig bad = legged("go2", 1);
+  bad.simulator.restitution_min = 0.2_r;
+  bad.simulator.restitution_max = 0.1_r;
+  EXPECT_FALSE(make_simulator(bad, err));
+  EXPECT_NE(err.find("simulator.restitution"), std::string::npos) << err;
+  bad = legged("go2", 1);
+  bad.simulator.added_mass_min_kg = -100;
+  EXPECT_FALSE(make_simulator(bad, err));
+  EXPECT_NE(err.find("simulator.added_mass_kg"), std::string::npos) << err;
+  WorldConfig quad;
+  quad.simulator.friction_min = quad.simulator.friction_max = 0.5_r;
+  EXPECT_FALSE(make_simulator(quad, Backend::rigid, err));
+  EXPECT_NE(err.find("simulator.friction"), std::string::npos) << err;
+  EXPECT_FALSE(make_simulator(quad, Backend::planar, err));
+  EXPECT_NE(err.find("simulator.friction"), std::string::npos) << err;
+  std::unique_ptr<Simulator> quad_sim = make_simulator(WorldConfig{}, err);
+  ASSERT_TRUE(quad_sim) << err;
+  EXPECT_FALSE(quad_sim->push_links());
+  EXPECT_NE(quad_sim->last_error().find("articulated only"), std::string::npos);
+}
+
+TEST(Articulated, RandomisedMassCentreOfMassFrictionRestitutionAndArmatureActOnTheRobot) {
+  std::string err;
+  // Added base mass: the ground carries the new weight at rest (within 2 %).
+  const double mass = total_mass("go2");
+  for (const real added : {-1.0_r, 3.0_r}) {
+    WorldConfig c = legged("go2", 1);
+    c.simulator.added_mass_min_kg = c.simulator.added_mass_max_kg = added;
+    const Standing s = stand(c);
+    EXPECT_NEAR(s.force_N[2], (mass + added) * 9.81, 0.02 * (mass + added) * 9.81) << added;
+    EXPECT_LT(s.drift_m, 1e-3);
+  }
+  // Centre-of-mass bias: the robot whose base mass sits furthest forward puts the largest share of
+  // its weight on its front feet, the one furthest back the least.
+  {
+    WorldConfig c = legged("go2", 8);
+    c.simulator.com_bias_max_m = 0.06_r;
+    std::unique_ptr<Simulator> sim = make_simulator(c, err);
+    ASSERT_TRUE(sim) << err;
+    std::vector<real> zero(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()), 0);
+    for (int s = 0; s < 150; ++s) sim->step(zero.data());
+    int fwd = 0, back = 0;
+    for (int i = 1; i < 8; ++i) {
+      if (sim->com_bias_b_m()[3 * i] > sim->com_bias_b_m()[3 * fwd]) fwd = i;
+      if (sim->com_bias_b_m()[3 * i] < sim->com_bias_b_m()[3 * back]) back = i;
+    }
+    ASSERT_GT(sim->com_bias_b_m()[3 * fwd] - sim->com_bias_b_m()[3 * back], 0.04_r);
+    EXPECT_GT(front_share(*sim, fwd), front_share(*sim, back) + 0.05) << front_share(*sim, fwd) << " " << front_share(*sim, back);
+  }
+  // Friction: on legged_gym's 11-degree slope (rise 0.2) the robot holds at mu 1 and slides at
+  // mu 0.05 < tan(11.3 deg).
+  {
+    double travel[2] = {0, 0};
+    const real mus[2] = {1.0_r, 0.05_r};
+    for (int k = 0; k < 2; ++k) {
+      WorldConfig c = legged("go2", 1);
+      c.env.terrain.type = TerrainType::heightfield;
+      c.env.terrain.procedural = "slope";
+      c.env.terrain.slope = 0.2_r;
+      c.env.terrain.length_x_m = 8;
+      c.env.terrain.width_y_m = 8;
+      c.simulator.friction_min = c.simulator.friction_max = mus[k];
+      std::unique_ptr<Simulator> sim = make_simulator(c, err);
+      ASSERT_TRUE(sim) << err;
+      EXPECT_EQ(sim->dr_friction_values()[0], mus[k]);
+      std::vector<real> zero(12, 0);
+      for (int s = 0; s < 100; ++s) sim->step(zero.data());
+      const Vec3 p0(sim->base_pos_w()[0], sim->base_pos_w()[1], sim->base_pos_w()[2]);
+      for (int s = 0; s < 100; ++s) sim->step(zero.data());
+      travel[k] = (Vec3(sim->base_pos_w()[0], sim->base_pos_w()[1], sim->base_pos_w()[2]) - p0).norm();
+    }
+    EXPECT_LT(travel[0], 2e-3);
+    EXPECT_GT(travel[1], 0.05);
+  }
+  // Restitution: dropped from 0.5 m above its standing height, the feet of the robot whose
+  // contacts have restitution 1 bounce off the ground (they leave it upwards at about their impact
+  // speed); with 0 they stay on it.
+  {
+    double rebound[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+      WorldConfig c = legged("go2", 1);
+      c.env.num_physics_steps_per_env_step_mean = 1;
+      c.simulator.restitution_min = c.simulator.restitution_max = static_cast<real>(1 - k);
+      std::unique_ptr<Simulator> sim = make_simulator(c, err);
+      ASSERT_TRUE(sim) << err;
+      const int env = 0;
+      const real pos[3] = {sim->base_pos_w()[0], sim->base_pos_w()[1], sim->base_pos_w()[2] + 0.5_r}, quat[4] = {0, 0, 0, 1},
+                 zero3[3] = {0, 0, 0};
+      ASSERT_TRUE(sim->reset_root_states(&env, 1, pos, quat, zero3, zero3));
+      std::vector<real> zero(12, 0);
+      real last = sim->feet_pos_w()[2];
+      for (int s = 0; s < 100; ++s) {
+        sim->step(zero.data());
+        const real z = sim->feet_pos_w()[2];  // foot 0
+        rebound[k] = std::max(rebound[k], static_cast<double>((z - last) / c.sim.dt_s));
+        last = z;
+      }
+    }
+    EXPECT_GT(rebound[0], 1.0) << rebound[0];  // impact at sqrt(2 g 0.5) = 3.1 m/s
+    EXPECT_LT(rebound[1], 0.5) << rebound[1];
+  }
+  // Armature: a joint with a heavy rotor answers a step of its target more slowly.
+  {
+    double speed[2] = {0, 0};
+    for (int k = 0; k < 2; ++k) {
+      WorldConfig c = legged("go2", 1);
+      c.env.num_physics_steps_per_env_step_mean = 1;
+      c.simulator.joint_armature_min_kg_m2 = c.simulator.joint_armature_max_kg_m2 = k == 0 ? 0.001_r : 0.2_r;
+      std::unique_ptr<Simulator> sim = make_simulator(c, err);
+      ASSERT_TRUE(sim) << err;
+      std::vector<real> zero(12, 0), step(12, 2);
+      for (int s = 0; s < 100; ++s) sim->step(zero.data());
+      sim->step(step.data());
+      for (int j = 0; j < 12; ++j) speed[k] += std::fabs(sim->dof_vel()[j]);
+    }
+    EXPECT_LT(speed[1], 0.5 * speed[0]) << speed[0] << " " << speed[1];
+  }
+}
+
+TEST(Articulated, PushLinksAppliesItsForcesForOnePhysicsStepAndKeepsResultsThreadIndependent) {
+  std::string err;
+  // In the air (no contact): after one physics step the base's velocity changes by about the
+  // pushes' total impulse over the robot's mass, in its direction, against the same robot unpushed.
+  WorldConfig c = legged("go2", 2);
+  c.env.num_physics_steps_per_env_step_mean = 1;
+  c.simulator.max_push_force_N = 100;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  const int ids[2] = {0, 1};
+  real pos[6], quat[8] = {0, 0, 0, 1, 0, 0, 0, 1}, zero6[6] = {0, 0, 0, 0, 0, 0};
+  for (int k = 0; k < 6; ++k) pos[k] = sim->base_pos_w()[k] + (k % 3 == 2 ? 2 : 0);
+  ASSERT_TRUE(sim->reset_root_states(ids, 2, pos, quat, zero6, zero6));
+  std::unique_ptr<Simulator> ref = make_simulator(c, err);
+  ASSERT_TRUE(ref) << err;
+  ASSERT_TRUE(ref->reset_root_states(ids, 2, pos, quat, zero6, zero6));
+  ASSERT_TRUE(sim->push_links()) << sim->last_error();
+  // The forces drawn: the same stream a second simulator would draw (they are not a view), so
+  // recompute them here from the documented stream.
+  const int nl = sim->num_links();
+  std::vector<real> a(24, 0);
+  sim->step(a.data());
+  ref->step(a.data());
+  const double mass = total_mass("go2");
+  for (int e = 0; e < 2; ++e) {
+    RngStream rng(c.seed, static_cast<std::uint32_t>(e), kPurposeLinkPush);
+    Vec3 total = Vec3::Zero();
+    for (int b = 0; b < nl; ++b)
+      for (int k = 0; k < 3; ++k) total[k] += rng.uniform(-100, 100);
+    const Vec3 dv_expected = total * c.sim.dt_s / static_cast<real>(mass);
+    Vec3 dv;
+    for (int k = 0; k < 3; ++k) dv[k] = sim->base_lin_vel_w()[3 * e + k] - ref->base_lin_vel_w()[3 * e + k];
+    EXPECT_GT(dv.dot(dv_expected) / (dv.norm() * dv_expected.norm()), 0.9) << e;
+    EXPECT_NEAR(dv.norm(), dv_expected.norm(), 0.35 * dv_expected.norm()) << e;
+  }
+  // Only for that one physics step: with 4 physics steps per env-step the change is still about one
+  // step's impulse (4 steps' would be 4 times as large).
+  c.env.num_physics_steps_per_env_step_mean = 4;
+  std::unique_ptr<Simulator> sim4 = make_simulator(c, err), ref4 = make_simulator(c, err);
+  ASSERT_TRUE(sim4 && ref4) << err;
+  ASSERT_TRUE(sim4->reset_root_states(ids, 2, pos, quat, zero6, zero6));
+  ASSERT_TRUE(ref4->reset_root_states(ids, 2, pos, quat, zero6, zero6));
+  ASSERT_TRUE(sim4->push_links());
+  sim4->step(a.data());
+  ref4->step(a.data());
+  for (int e = 0; e < 2; ++e) {
+    RngStream rng(c.seed, static_cast<std::uint32_t>(e), kPurposeLinkPush);
+    Vec3 total = Vec3::Zero();
+    for (int b = 0; b < nl; ++b)
+      for (int k = 0; k < 3; ++k) total[k] += rng.uniform(-100, 100);
+    const double one_step = (total * c.sim.dt_s / static_cast<real>(mass)).norm();
+    Vec3 dv;
+    for (int k = 0; k < 3; ++k) dv[k] = sim4->base_lin_vel_w()[3 * e + k] - ref4->base_lin_vel_w()[3 * e + k];
+    EXPECT_LT(dv.norm(), 2 * one_step) << e;
+    EXPECT_GT(dv.norm(), 0.5 * one_step) << e;
+  }
+
+  // Every randomisation and push_links on: bit-identical for 1, 2 and 3 threads.
+  std::uint64_t hashes[3] = {};
+  for (int t = 1; t <= 3; ++t) {
+    WorldConfig d = legged("go2", 5, t);
+    d.task.episode_len_env_steps = 40;
+    randomise_all(d);
+    std::unique_ptr<Simulator> s = make_simulator(d, err);
+    ASSERT_TRUE(s) << err;
+    RngStream rng(5, 0, kPurposeUser + 40);
+    std::vector<real> act(static_cast<std::size_t>(s->num_robots() * s->action_dim()));
+    for (int k = 0; k < 120; ++k) {
+      for (real& v : act) v = rng.uniform(-1, 1);
+      if (k % 25 == 0) {
+        EXPECT_TRUE(s->push_links());
+      }
+      s->step(act.data());
+    }
+    for (int k = 0; k < s->num_robots() * 3; ++k) EXPECT_TRUE(std::isfinite(s->base_pos_w()[k]));
+    hashes[t - 1] = s->state_hash();
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
+  EXPECT_EQ(hashes[0], hashes[2]);
+}
+
+TEST(Articulated, TerrainCurriculumPlacesRobotsOnTilesAndMovesTheirLevels) {
+  WorldConfig c = legged("go2", 10);
+  c.env.terrain.type = TerrainType::heightfield;
+  c.env.terrain.procedural = "curriculum";
+  c.env.terrain.num_rows = 4;
+  c.env.terrain.num_cols = 5;
+  c.env.terrain.border_size_m = 2;
+  c.env.terrain.max_init_terrain_level = 1;
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(c, err);
+  ASSERT_TRUE(sim) << err;
+  ASSERT_EQ(sim->num_terrain_levels(), 4);
+  std::unique_ptr<Terrain> terrain;
+  ASSERT_TRUE(Terrain::build(c.env.terrain, c.seed, terrain, err)) << err;
+  for (int e = 0; e < 10; ++e) {
+    EXPECT_EQ(sim->terrain_types()[e], e / 2);  // legged_gym: env e on type e * cols / envs
+    EXPECT_GE(sim->terrain_levels()[e], 0);
+    EXPECT_LE(sim->terrain_levels()[e], 1);  // max_init_terrain_level
+    const Vec3& o = terrain->tile_origin(sim->terrain_levels()[e], sim->terrain_types()[e]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(sim->env_origins_w()[3 * e + k], o[k]);
+    // Spawned within 1 m of the tile's centre in x and y.
+    EXPECT_LE(std::fabs(sim->base_pos_w()[3 * e] - o[0]), 1);
+    EXPECT_LE(std::fabs(sim->base_pos_w()[3 * e + 1] - o[1]), 1);
+  }
+  // Up, down (not below 0), and past the top to a random level; the origin follows the level.
+  const int ids[3] = {0, 1, 2};
+  const int l0 = sim->terrain_levels()[0], l1 = sim->terrain_levels()[1];
+  const std::uint8_t up[3] = {1, 0, 1}, down[3] = {0, 1, 0};
+  ASSERT_TRUE(sim->update_terrain_curriculum(ids, 3, up, down)) << sim->last_error();
+  EXPECT_EQ(sim->terrain_levels()[0], l0 + 1);
+  EXPECT_EQ(sim->terrain_levels()[1], std::max(0, l1 - 1));
+  const Vec3& o0 = terrain->tile_origin(l0 + 1, 0);
+  EXPECT_EQ(sim->env_origins_w()[0], o0[0]);
+  int seen_top = 0;
+  for (int k = 0; k < 40; ++k) {
+    const int env = 3;
+    const std::uint8_t u = 1, d = 0;
+    ASSERT_TRUE(sim->update_terrain_curriculum(&env, 1, &u, &d));
+    EXPECT_LT(sim->terrain_levels()[3], 4);  // never past the top row
+    seen_top += sim->terrain_levels()[3] == 3 ? 1 : 0;
+  }
+  EXPECT_GT(seen_top, 0);
+  // The robot moves to its new tile at its next reset.
+  const int env0 = 0;
+  sim->reset_idx(&env0, 1);
+  EXPECT_LE(std::fabs(sim->base_pos_w()[0] - o0[0]), 1);
+  EXPECT_LE(std::fabs(sim->base_pos_w()[1] - o0[1]), 1);
+  EXPECT_GT(sim->base_pos_w()[2], o0[2]);
+  const int bad = 12;
+  EXPECT_FALSE(sim->update_terrain_curriculum(&bad, 1, up, down));
+  EXPECT_NE(sim->last_error().find("env id 12"), std::string::npos);
+  // Without tiles: refused by name.
+  std::unique_ptr<Simulator> flat = make_simulator(legged("go2", 2), err);
+  ASSERT_TRUE(flat) << err;
+  EXPECT_EQ(flat->num_terrain_levels(), 0);
+  EXPECT_FALSE(flat->update_terrain_curriculum(ids, 1, up, down));
+  EXPECT_NE(flat->last_error().find("tiled terrain"), std::string::npos);
 }

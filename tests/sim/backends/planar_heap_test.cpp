@@ -123,7 +123,8 @@ TEST(PlanarHeap, NoAllocationInStepAfterWarmUp) {
 TEST(ArticulatedHeap, NoAllocationInStepsResetsAndPushes) {
   // Articulated robots (sim/src/backends/articulated.cpp): every array is sized at set-up, so not
   // even the first step allocates; measured over steps with random joint targets, auto-resets
-  // (short episodes), reset_idx, reset_dofs and push_robots, on 1 and 2 threads.
+  // (short episodes), reset_idx, reset_dofs, push_robots and push_links, with every randomisation
+  // of simulator.* on, on 1 and 2 threads.
   for (int threads = 1; threads <= 2; ++threads) {
     std::string err;
     WorldConfig cfg;
@@ -134,6 +135,17 @@ TEST(ArticulatedHeap, NoAllocationInStepsResetsAndPushes) {
     cfg.env.num_envs = 4;
     cfg.env.num_physics_steps_per_env_step_mean = 4;
     cfg.num_threads = threads;
+    // Every randomisation on, so that their draws and the per-environment model are in the count.
+    cfg.simulator.friction_min = 0.5_r;
+    cfg.simulator.friction_max = 1.25_r;
+    cfg.simulator.restitution_min = 0;
+    cfg.simulator.restitution_max = 0.5_r;
+    cfg.simulator.added_mass_min_kg = -1;
+    cfg.simulator.added_mass_max_kg = 2;
+    cfg.simulator.com_bias_max_m = 0.03_r;
+    cfg.simulator.joint_armature_min_kg_m2 = 0;
+    cfg.simulator.joint_armature_max_kg_m2 = 0.02_r;
+    cfg.simulator.max_push_force_N = 20;
     std::unique_ptr<Simulator> sim = make_simulator(cfg, err);
     ASSERT_TRUE(sim) << err;
     std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()));
@@ -145,6 +157,9 @@ TEST(ArticulatedHeap, NoAllocationInStepsResetsAndPushes) {
       for (real& v : a) v = rng.uniform(-1, 1);
       sim->step(a.data());
       if (s % 40 == 0) sim->push_robots();
+      if (s % 30 == 0) {
+        EXPECT_TRUE(sim->push_links());
+      }
       if (s % 55 == 0) sim->reset_idx(ids, 2);
       if (s % 70 == 0) {
         EXPECT_TRUE(sim->reset_dofs(ids, 1, dp.data(), dv.data()));

@@ -126,6 +126,71 @@ TEST(SimTerrain, ProceduralSlopeStairsAndRandomHeights) {
   EXPECT_NEAR(ps->height_at(-1.95_r, 0), 0, 1e-5);
 }
 
+TEST(SimTerrain, CurriculumTilesFollowLeggedGymsDifficultyAndTypes) {
+  // 3 levels x 5 types of 8 m x 8 m tiles (80 x 80 samples) in a 2 m border, legged_gym's default
+  // proportions [0.1, 0.1, 0.35, 0.25, 0.2]: column j's choice j / 5 + 0.001 makes columns 0..4 a
+  // smooth slope (negative: choice < 0.05), stairs up (a pit: choice < 0.55), stairs up, stairs
+  // down, discrete obstacles; level i's difficulty is i / 3.
+  TerrainConfig c;
+  c.type = TerrainType::heightfield;
+  c.procedural = "curriculum";
+  c.num_rows = 3;
+  c.num_cols = 5;
+  c.border_size_m = 2;
+  auto t = make_terrain(c, 7);
+  ASSERT_EQ(t->tile_rows(), 3);
+  ASSERT_EQ(t->tile_cols(), 5);
+  EXPECT_EQ(t->nx(), 3 * 80 + 2 * 20);
+  EXPECT_EQ(t->ny(), 5 * 80 + 2 * 20);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 5; ++j) {
+      // Tile centres: corner + (border + (i + 1/2) tile) in x, likewise in y.
+      EXPECT_NEAR(t->tile_origin(i, j)[0], t->corner_w()[0] + 2 + (i + 0.5) * 8, 1e-4);
+      EXPECT_NEAR(t->tile_origin(i, j)[1], t->corner_w()[1] + 2 + (j + 0.5) * 8, 1e-4);
+    }
+  EXPECT_EQ(t->heights()[0], 0);  // the border is flat
+  for (int i = 0; i < 3; ++i) {
+    const double d = i / 3.0;
+    // Smooth slope, negative: the platform sits at the pyramid's height at its edge,
+    // slope x (tile / 2) x ((4 - 1.5) / 4)^2, below the border.
+    EXPECT_NEAR(t->tile_origin(i, 0)[2], -0.4 * d * 4 * 0.390625, 1e-5) << i;
+    // Stairs of 3 samples (0.31 m) until the 30-sample (3 m) platform: 9 steps of
+    // 0.05 + 0.18 d, down into the pit (stairs up) or up onto the pyramid (stairs down).
+    EXPECT_NEAR(t->tile_origin(i, 1)[2], -9 * (0.05 + 0.18 * d), 1e-5) << i;
+    EXPECT_NEAR(t->tile_origin(i, 2)[2], -9 * (0.05 + 0.18 * d), 1e-5) << i;
+    EXPECT_NEAR(t->tile_origin(i, 3)[2], 9 * (0.05 + 0.18 * d), 1e-5) << i;
+    EXPECT_NEAR(t->tile_origin(i, 4)[2], 0, 1e-6) << i;  // the obstacles' levelled platform
+    // Discrete obstacles: every height is 0 or one of +-h, +-h/2 with h = 0.05 + 0.2 d.
+    const double h = 0.05 + 0.2 * d;
+    int raised = 0;
+    for (int b = 0; b < 80; ++b)
+      for (int a = 0; a < 80; ++a) {
+        const real z = t->heights()[static_cast<std::size_t>(20 + 4 * 80 + b) * static_cast<std::size_t>(t->nx()) +
+                                    static_cast<std::size_t>(20 + i * 80 + a)];
+        const double az = std::fabs(static_cast<double>(z));
+        EXPECT_TRUE(az < 1e-6 || std::fabs(az - h) < 1e-5 || std::fabs(az - h / 2) < 1e-5) << z;
+        raised += az > 1e-6 ? 1 : 0;
+      }
+    EXPECT_GT(raised, 400) << i;  // 20 rectangles of >= 1 m x 1 m, partly overlapping
+  }
+  // The level-0 slope is flat and the hardest stairs are the steepest.
+  EXPECT_NEAR(t->height_at(t->tile_origin(0, 0)[0] + 3.5_r, t->tile_origin(0, 0)[1]), 0, 1e-6);
+  // Reproducible for a seed; randomized tiles differ between seeds.
+  auto t2 = make_terrain(c, 7);
+  EXPECT_EQ(t->heights(), t2->heights());
+  c.procedural = "randomized";
+  auto r1 = make_terrain(c, 7), r2 = make_terrain(c, 8);
+  EXPECT_NE(r1->heights(), r2->heights());
+  EXPECT_EQ(r1->tile_rows(), 3);
+  // Other terrains have no tiles; tiles too small for the platform are refused by name.
+  EXPECT_EQ(make_terrain(slope_config(0.1_r))->tile_rows(), 0);
+  c.tile_length_m = 3;
+  std::unique_ptr<Terrain> bad;
+  std::string err;
+  EXPECT_FALSE(Terrain::build(c, 1, bad, err));
+  EXPECT_NE(err.find("tile_length_m"), std::string::npos) << err;
+}
+
 TEST(SimTerrain, HeightmapImagesPgmAndPng) {
   TerrainConfig t;
   t.type = TerrainType::heightfield;

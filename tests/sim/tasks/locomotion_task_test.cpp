@@ -16,6 +16,7 @@
 #include "kestrel/sim/locomotion_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/scenario.hpp"
+#include "kestrel/sim/terrain.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -259,6 +260,71 @@ TEST(LocomotionTask, PushesEveryInterval) {
   EXPECT_GT(after, 0.25);  // |U(-1, 1)^2| averages 0.77 m/s, less one step of friction
 }
 
+TEST(LocomotionTask, TerrainCurriculumMovesLevelsByTheDistanceWalked) {
+  // On a tiled terrain, at each episode's end: up a level past half a tile (4 m) from the origin,
+  // down when closer than half of what the command asked over the episode (|cmd| x 20 s x 0.5).
+  WorldConfig c = go2_task(4);
+  c.env.terrain.type = TerrainType::heightfield;
+  c.env.terrain.procedural = "curriculum";
+  c.env.terrain.num_rows = 5;
+  c.env.terrain.num_cols = 2;
+  c.env.terrain.border_size_m = 2;
+  c.env.terrain.max_init_terrain_level = 4;
+  c.task.episode_len_env_steps = 1000;  // 20 s
+  c.task.locomotion.push_robots = false;
+  c.task.locomotion.add_noise = false;
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  Simulator& sim = t->simulator();
+  ASSERT_EQ(sim.num_terrain_levels(), 5);
+  std::vector<float> a(4 * 12, 0.0f);
+  t->step(a.data());
+  std::vector<int> before(sim.terrain_levels(), sim.terrain_levels() + 4);
+  // Env 0 carried 5 m from its origin, env 1 put back on its origin: then both episodes end (a
+  // base contact: upside down, half in the ground).
+  std::vector<float> cmd(4);
+  for (int e = 0; e < 4; ++e) cmd[static_cast<std::size_t>(e)] = std::hypot(t->observations()[48 * e + 9], t->observations()[48 * e + 10]) / 2;
+  const int ids[2] = {0, 1};
+  const real* o = sim.env_origins_w();
+  std::unique_ptr<Terrain> ground;
+  std::string err;
+  ASSERT_TRUE(Terrain::build(c.env.terrain, c.seed, ground, err)) << err;
+  const real pos[6] = {o[0] + 5, o[1], ground->height_at(o[0] + 5, o[1]), o[3], o[4], ground->height_at(o[3], o[4])};
+  const real quat[8] = {1, 0, 0, 0, 1, 0, 0, 0}, zero[6] = {0, 0, 0, 0, 0, 0};
+  ASSERT_TRUE(sim.reset_root_states(ids, 2, pos, quat, zero, zero));
+  t->step(a.data());
+  ASSERT_EQ(t->terminations()[0], 1);
+  ASSERT_EQ(t->terminations()[1], 1);
+  // Env 0: up (from the top, a random level below it).
+  if (before[0] < 4) {
+    EXPECT_EQ(sim.terrain_levels()[0], before[0] + 1);
+  } else {
+    EXPECT_LT(sim.terrain_levels()[0], 5);
+  }
+  // Env 1: down where its command asked to walk at all, else kept.
+  EXPECT_EQ(sim.terrain_levels()[1], cmd[1] > 0 ? std::max(0, before[1] - 1) : before[1]) << cmd[1];
+  EXPECT_EQ(sim.terrain_levels()[2], before[2]);  // episodes not ended: kept
+  EXPECT_EQ(sim.terrain_levels()[3], before[3]);
+  double mean = 0;
+  for (int e = 0; e < 4; ++e) mean += sim.terrain_levels()[e] / 4.0;
+  EXPECT_DOUBLE_EQ(t->infos().mean_terrain_level, mean);
+  // The robots were reset onto their new tiles.
+  for (int e = 0; e < 2; ++e) {
+    EXPECT_LE(std::fabs(sim.base_pos_w()[3 * e] - sim.env_origins_w()[3 * e]), 1);
+    EXPECT_LE(std::fabs(sim.base_pos_w()[3 * e + 1] - sim.env_origins_w()[3 * e + 1]), 1);
+  }
+  // Off: the levels never move.
+  c.task.locomotion.terrain_curriculum = false;
+  auto t2 = build(c);
+  ASSERT_TRUE(t2);
+  std::vector<int> b2(t2->simulator().terrain_levels(), t2->simulator().terrain_levels() + 4);
+  const real* o2 = t2->simulator().env_origins_w();
+  const real pos2[3] = {o2[0] + 5, o2[1], ground->height_at(o2[0] + 5, o2[1])};
+  ASSERT_TRUE(t2->simulator().reset_root_states(ids, 1, pos2, quat, zero, zero));
+  t2->step(a.data());
+  EXPECT_EQ(t2->simulator().terrain_levels()[0], b2[0]);
+}
+
 std::vector<float> run(int threads, std::uint64_t* hash) {
   WorldConfig c = go2_task(6, threads);
   c.task.episode_len_env_steps = 15;
@@ -290,15 +356,31 @@ TEST(LocomotionTask, BitIdenticalForAnyThreadCount) {
 }
 
 TEST(LocomotionTask, NoHeapInsideStep) {
-  WorldConfig c = go2_task(4);
-  c.task.episode_len_env_steps = 5;  // resets inside the counted steps
-  c.task.locomotion.push_interval_s = 0.04_r;
-  auto t = build(c);
-  std::vector<float> a(4 * 12, 0.3f);
-  t->step(a.data());
-  kestrel::test::HeapCounter counter;
-  for (int s = 0; s < 20; ++s) t->step(a.data());
-  EXPECT_EQ(counter.allocations(), 0u);
+  for (int tiled = 0; tiled < 2; ++tiled) {
+    WorldConfig c = go2_task(4);
+    c.task.episode_len_env_steps = 5;  // resets inside the counted steps
+    c.task.locomotion.push_interval_s = 0.04_r;
+    if (tiled) {  // the terrain curriculum, link pushes and the randomisation in the counted steps too
+      c.env.terrain.type = TerrainType::heightfield;
+      c.env.terrain.procedural = "curriculum";
+      c.env.terrain.num_rows = 3;
+      c.env.terrain.num_cols = 2;
+      c.env.terrain.border_size_m = 1;
+      c.task.locomotion.push_links_interval_s = 0.04_r;
+      c.simulator.max_push_force_N = 20;
+      c.simulator.friction_min = 0.5_r;
+      c.simulator.friction_max = 1.25_r;
+      c.simulator.added_mass_min_kg = -1;
+      c.simulator.added_mass_max_kg = 1;
+    }
+    auto t = build(c);
+    std::vector<float> a(4 * 12, 0.3f);
+    t->step(a.data());
+    kestrel::test::HeapCounter counter;
+    for (int s = 0; s < 20; ++s) t->step(a.data());
+    EXPECT_EQ(counter.allocations(), 0u) << tiled;
+    EXPECT_GE(t->infos().episodes, 4u);
+  }
 }
 
 TEST(LocomotionTask, ScenarioKeysAndRefusals) {

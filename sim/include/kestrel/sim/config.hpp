@@ -97,6 +97,17 @@ struct TerrainConfig {
   real min_height_m = -0.05_r, max_height_m = 0.05_r, height_step_m = 0.005_r, downsampled_scale_m = 0.2_r;  // random_uniform
   int num_waves = 2;                // wave
   real amplitude_m = 0.2_r;         // wave
+  // curriculum / randomized (legged_gym's terrain.py curiculum() / randomized_terrain()): a grid of
+  // num_rows x num_cols tiles of tile_length_m x tile_width_m inside a flat border; row i (along x)
+  // is difficulty level i (curriculum: i / num_rows; randomized: drawn per tile), column j the
+  // terrain type by the cumulative terrain_proportions of [smooth slope, rough slope, stairs up,
+  // stairs down, discrete obstacles]. Robots start on a tile's centre (env_origins) at a level in
+  // [0, max_init_terrain_level] and move between levels by Simulator::update_terrain_curriculum.
+  int num_rows = 10, num_cols = 20;
+  real tile_length_m = 8, tile_width_m = 8;
+  std::vector<real> terrain_proportions = {0.1_r, 0.1_r, 0.35_r, 0.25_r, 0.2_r};
+  real border_size_m = 25;
+  int max_init_terrain_level = 5;
   std::string mesh_file;            // trimesh
   // measured_heights (legged_gym): heights sampled at these body-yaw-frame offsets around each robot.
   bool measure_heights = false;
@@ -321,6 +332,13 @@ struct LocomotionConfig {
   real push_interval_s = 15;  // every robot pushed (simulator.max_push_vel_xy_m_s) this often
   real reset_dof_pos_scale_min = 0.5_r, reset_dof_pos_scale_max = 1.5_r;  // dof_pos = home x U(min, max)
   real reset_base_vel_max = 0.5_r;  // base linear and angular velocity components U(-max, max) at reset
+  // legged_gym's terrain curriculum (terrain.curriculum, on a tiled terrain: env.terrain.procedural
+  // curriculum / randomized): at each episode's end the robot moves a level up if it walked farther
+  // than half a tile from its origin, down if less than half of what its command asked over the
+  // episode (Simulator::update_terrain_curriculum); ignored on other terrains.
+  bool terrain_curriculum = true;
+  // LeggedGym-Ex's push_links: every link pushed (simulator.max_push_force_N) this often (0: never).
+  real push_links_interval_s = 0;
 };
 
 struct TaskConfig {
@@ -369,9 +387,24 @@ struct SimulatorConfig {
   int lidar_beams = 0;               // 2-D lidar: 0 = none
   real lidar_fov_rad = 4.71238898_r; // 270 deg, centred on body x
   real lidar_max_range_m = 10;
-  // Domain randomisation per reset (planar): uniform in [min, max].
+  // Domain randomisation per reset (planar and articulated robots): uniform in [min, max].
+  // Planar: the body's mass and its centre of mass in x and y. Articulated (legged_gym's
+  // randomize_base_mass / LeggedGym-Ex's randomize_com_displacement): the root body's mass and
+  // its centre of mass in x, y and z, the rest of its inertia kept (as legged_gym does).
   real added_mass_min_kg = 0, added_mass_max_kg = 0;
-  real com_bias_max_m = 0;           // centre-of-mass offset, x and y in [-max, max] (body frame)
+  real com_bias_max_m = 0;           // centre-of-mass offset in [-max, max] per axis (body frame)
+  // Articulated robots only (legged_gym's randomize_friction / restitution, LeggedGym-Ex's
+  // randomize_joint_armature), drawn per robot at each reset; -1 (both ends): not randomised.
+  // friction: every contact of the robot with the ground gets this Coulomb coefficient (else the
+  // mean of the shape's and the ground's); restitution: likewise, in [0, 1] (else the mean);
+  // joint_armature: each actuated joint's rotor inertia, drawn per joint (kg m^2; else the file's
+  // or robot.joint_armature_kg_m2).
+  real friction_min = -1, friction_max = -1;
+  real restitution_min = -1, restitution_max = -1;
+  real joint_armature_min_kg_m2 = -1, joint_armature_max_kg_m2 = -1;
+  // push_links (LeggedGym-Ex): every link of every robot gets a force with components drawn in
+  // [-max, max] at its centre of mass during the next physics step.
+  real max_push_force_N = 0;
   real motor_scale_min = 1, motor_scale_max = 1;  // motor/drive constant scale
   real gain_scale_min = 1, gain_scale_max = 1;    // controller gain scale
 };

@@ -84,6 +84,17 @@ constexpr std::uint32_t kPurposePush = kPurposeUser + 5;
 constexpr std::uint32_t kPurposeScriptedTargets = kPurposeUser + 6;
 /// Random stream purpose of the articulated robots' joint-gain scales (drawn at each reset).
 constexpr std::uint32_t kPurposeJointGains = kPurposeUser + 7;
+/// Random stream purpose of the articulated robots' other randomisation (friction, restitution,
+/// added base mass, centre-of-mass bias, joint armature; drawn at each reset).
+constexpr std::uint32_t kPurposeDomainRand = kPurposeUser + 8;
+/// Random stream purpose of push_links' forces.
+constexpr std::uint32_t kPurposeLinkPush = kPurposeUser + 9;
+/// Random stream purpose of the terrain curriculum (start levels, levels past the top, spawn offsets).
+constexpr std::uint32_t kPurposeTerrainLevel = kPurposeUser + 10;
+
+/// True when the scenario asks for a randomisation only articulated robots have (simulator.friction,
+/// restitution, joint_armature_kg_m2 or max_push_force_N set): the other robots' backends refuse it.
+bool articulated_only_randomisation(const SimulatorConfig& sc);
 
 /// What legged_gym reads from an articulated robot's asset (Simulator::robot_layout; empty for
 /// other robots): the actuated joints in body order with their home (default) positions, position
@@ -150,6 +161,32 @@ class Simulator {
   /// legged_gym's _push_robots: every robot's world-frame v_x and v_y are set to values drawn
   /// uniformly in [-max_push_vel_xy_m_s, max_push_vel_xy_m_s] from its environment's push stream.
   void push_robots();
+  /// legged_gym's _update_terrain_curriculum on a tiled terrain (env.terrain.procedural curriculum
+  /// or randomized): each listed environment's level moves up by one where move_up[k] and down by
+  /// one where move_down[k] (not below 0); one that passes the top level goes to a level drawn
+  /// uniformly in [0, levels) from its stream. Its origin becomes its tile's (terrain_levels,
+  /// env_origins_w): the robot goes there at its next reset. False (nothing changed, last_error()
+  /// says why) without a tiled terrain or for a bad env id.
+  [[nodiscard]] virtual bool update_terrain_curriculum(const int* env_ids, int count, const std::uint8_t* move_up,
+                                                       const std::uint8_t* move_down) {
+    (void)env_ids, (void)count, (void)move_up, (void)move_down;
+    return fail(std::string("simulator ") + backend_name() +
+                ": update_terrain_curriculum: needs articulated robots on a tiled terrain (env.terrain.procedural curriculum or randomized)");
+  }
+  /// Tiled terrain: each environment's level (row of tiles) and type (column); 0 levels otherwise.
+  int num_terrain_levels() const { return num_terrain_levels_; }
+  const int* terrain_levels() const { return terrain_levels_.data(); }  // (envs)
+  const int* terrain_types() const { return terrain_types_.data(); }    // (envs)
+  /// (envs x 3) m: where each environment's robot starts (articulated: its grid or tile origin;
+  /// zeros on other robots, whose starts are drawn per reset).
+  const real* env_origins_w() const { return env_origins_w_.data(); }
+  /// LeggedGym-Ex's push_links: every link of every robot gets a force (world frame, components
+  /// drawn uniformly in [-simulator.max_push_force_N, max] from its environment's link-push stream)
+  /// at its centre of mass during the next physics step. False (nothing drawn, last_error() says
+  /// why) for robots without links (articulated robots only).
+  [[nodiscard]] virtual bool push_links() {
+    return fail(std::string("simulator ") + backend_name() + ": push_links: the robot has no links (robot kind articulated only)");
+  }
 
   // State views (refreshed by post_physics_step, reset_idx, reset_root_states and push_robots).
   // The derived ones (Euler angles, applied wrench, motor and gain scales) may be computed when
@@ -168,9 +205,17 @@ class Simulator {
   const std::uint8_t* crashed() const { return crashed_.data(); }     // (robots)
   const std::uint8_t* reset_buf() const { return reset_buf_.data(); } // (envs) episode ended last step
 
-  // Domain-randomisation views (drawn at each reset; robots).
+  // Domain-randomisation views (drawn at each reset; robots). Articulated robots: added_mass_kg is
+  // legged_gym's dr_added_base_mass (the root body's), com_bias_b_m its dr_base_com_bias.
   const real* added_mass_kg() const { return added_mass_kg_.data(); }
   const real* com_bias_b_m() const { return com_bias_b_m_.data(); }    // (robots x 3)
+  /// Articulated robots: the ground contacts' friction coefficient and restitution of each robot
+  /// (simulator.friction / restitution; -1 where not randomised: each contact then takes the mean
+  /// of the shape's and the ground's), and each actuated joint's armature (robots x dofs, kg m^2 or
+  /// kg: the value in effect, randomised or not). Empty views on other robots.
+  const real* dr_friction_values() const { return dr_friction_.data(); }
+  const real* dr_restitution_values() const { return dr_restitution_.data(); }
+  const real* dr_joint_armature() const { return dr_armature_.data(); }
   /// Multirotor: motor time constant / its nominal value; ground vehicle: drive force scale.
   const real* motor_constant_scale() const { return fresh(kLazyScales, motor_scale_); }
   /// Active controller gains / nominal gains (Lee: mean over the 12 gain components).
@@ -299,6 +344,10 @@ class Simulator {
   std::vector<real> lidar_;
   int num_dofs_ = 0, num_feet_ = 0, num_links_ = 0, num_height_points_ = 0;
   std::vector<real> dof_pos_, dof_vel_, torques_, feet_pos_w_, link_forces_w_, dr_kp_scale_, dr_kd_scale_;
+  std::vector<real> dr_friction_, dr_restitution_, dr_armature_;
+  int num_terrain_levels_ = 0;
+  std::vector<int> terrain_levels_, terrain_types_;  // (envs)
+  std::vector<real> env_origins_w_;                  // (envs x 3)
   std::vector<RngStream> rng_push_;
   RobotLayout layout_;
   std::string error_;

@@ -38,6 +38,7 @@ struct TaskInfos {
                                         // target = start), never successes (Simulator::placement_fallback)
   double episode_reward_sum = 0;    // sum over finished episodes of the episode's summed reward
   int curriculum_level = 0;         // obstacle curriculum level now (navigation_task)
+  double mean_terrain_level = 0;    // mean terrain level of the environments now (locomotion_task on tiled terrain)
   std::uint64_t curriculum_changes = 0;  // times the curriculum level moved
   double mean_episode_reward() const { return episodes > 0 ? episode_reward_sum / static_cast<double>(episodes) : 0; }
   /// Finished episodes with a real (start, target) pair: the success rate's denominator.

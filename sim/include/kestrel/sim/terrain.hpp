@@ -1,6 +1,11 @@
 // Terrain of the `rigid` world: plane, height field or triangle mesh (TerrainConfig in config.hpp),
 // shared read-only by every environment of a world (one terrain, built once at World::create).
 //
+// Tiled terrains (procedural curriculum / randomized): legged_gym's Terrain class (terrain.py:
+// curiculum() and randomized_terrain() over make_terrain's smooth and rough pyramid slopes,
+// pyramid stairs up and down and discrete obstacles, with its difficulty formulas); heights stay
+// float metres as below, and each tile's generators work on the tile's samples alone.
+//
 // Generators: the height-field terrains of legged_gym (N. Rudin et al., "Learning to walk in
 // minutes using massively parallel deep reinforcement learning", CoRL 2021; leggedrobotics/
 // legged_gym legged_gym/utils/terrain.py, which calls isaacgym's terrain_utils: sloped_terrain,
@@ -96,6 +101,13 @@ class Terrain {
   real spacing_m() const { return hf_.dx; }
   const Vec3& corner_w() const { return scene_position_w_; }
   const std::vector<real>& heights() const { return heights_; }
+  // Tiled terrains (procedural curriculum / randomized): tile_rows() difficulty levels along x by
+  // tile_cols() terrain types along y; tile_origin(level, type) is the world position of the
+  // tile's centre at the highest surface of its central 2 m x 2 m (legged_gym's env_origins).
+  // 0 rows and 0 columns for every other terrain.
+  int tile_rows() const { return tile_rows_; }
+  int tile_cols() const { return tile_cols_; }
+  const Vec3& tile_origin(int level, int type) const { return tile_origins_[static_cast<std::size_t>(level * tile_cols_ + type)]; }
 
   Terrain() = default;
   Terrain(const Terrain&) = delete;
@@ -110,6 +122,8 @@ class Terrain {
   Vec3 scene_position_w_ = Vec3::Zero();  // height field: world position of sample (0, 0), z offset
   // Height field.
   std::vector<real> heights_;
+  int tile_rows_ = 0, tile_cols_ = 0;
+  std::vector<Vec3> tile_origins_;  // (rows x cols)
   sensors::HeightField hf_;
   // Triangle mesh (world-frame vertices) and its BVH.
   SceneMesh trimesh_;
