@@ -78,9 +78,13 @@ def capture_frame(sim: _core.Simulator, envs: list[int], step: int, time_s: floa
         "target_w": np.array(sim.target_w[rows], dtype=np.float64),
         "contact_forces_w": np.array(sim.contact_forces_w[rows], dtype=np.float64),
     }
-    rigid = sim.backend == "rigid"
-    if rigid:
+    # The rigid World's own data (world_data, motors, obstacles); articulated robots and planar have none.
+    try:
         wd = sim.world_data()
+    except ValueError:
+        wd = None
+    rigid = wd is not None
+    if rigid:
         r["actions"] = np.array(wd["actions"][rows][:, : sim.action_dim], dtype=np.float64)
         r["crashed"] = np.array(wd["crashed"][rows], dtype=bool).reshape(-1)
         thrust, faults = sim.motor_state()

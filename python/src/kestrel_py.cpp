@@ -471,8 +471,16 @@ nb::dict scene_info(const ks::Simulator& sim) {
   out["rotor_direction"] = owned_array(std::move(rdir), {nr});
   const ks::World* w = ks::rigid_world(sim);
   out["terrain"] = "plane";
-  if (w != nullptr && w->model().terrain) {
-    const ks::Terrain& t = *w->model().terrain;
+  // The World's terrain; backends without a World (articulated robots) build theirs from the same
+  // config and seed, so a second build here gives the same heights.
+  std::unique_ptr<ks::Terrain> own;
+  const ks::Terrain* tp = w != nullptr && w->model().terrain ? w->model().terrain.get() : nullptr;
+  if (tp == nullptr && w == nullptr && sim.backend() == ks::Backend::rigid && c.env.terrain.type == ks::TerrainType::heightfield) {
+    std::string err;
+    if (ks::Terrain::build(c.env.terrain, c.seed, own, err)) tp = own.get();
+  }
+  if (tp != nullptr) {
+    const ks::Terrain& t = *tp;
     out["terrain"] = t.type() == ks::TerrainType::heightfield ? "heightfield" : t.type() == ks::TerrainType::trimesh ? "trimesh" : "plane";
     if (t.type() == ks::TerrainType::heightfield) {
       std::vector<double> h(t.heights().begin(), t.heights().end());
@@ -482,12 +490,14 @@ nb::dict scene_info(const ks::Simulator& sim) {
                                               static_cast<double>(t.corner_w().z()));
     }
   }
+  // measured_heights' points, x-major over env.terrain.measured_points_x_m x _y_m (as every backend lays them).
   std::vector<double> hx, hy;
-  if (w != nullptr)
-    for (std::size_t k = 0; k < w->model().height_points_x_b.size(); ++k) {
-      hx.push_back(static_cast<double>(w->model().height_points_x_b[k]));
-      hy.push_back(static_cast<double>(w->model().height_points_y_b[k]));
-    }
+  if (sim.num_height_points() > 0)
+    for (real x : c.env.terrain.measured_points_x_m)
+      for (real y : c.env.terrain.measured_points_y_m) {
+        hx.push_back(static_cast<double>(x));
+        hy.push_back(static_cast<double>(y));
+      }
   const std::size_t nh = hx.size();
   out["height_points_x_b"] = owned_array(std::move(hx), {nh});
   out["height_points_y_b"] = owned_array(std::move(hy), {nh});

@@ -239,7 +239,7 @@ def test_record_reads_back_and_matches_the_cxx_run(tmp_path, root):
     assert _hash_line(r.stdout) == py_hash
 
 
-def test_legged_run_hash_matches_and_debug_vis_draws_samples(tmp_path, root, kestrel_cli):
+def test_legged_run_hash_matches_the_cxx_run_and_replays(tmp_path, root, kestrel_cli):
     scenario = str(root / "sim" / "scenarios" / "go2_rough.yaml")
     args = [scenario, "--envs", "2", "--steps", "20", "--threads", "1", "--seed", "2"]
     out = io.StringIO()
@@ -251,20 +251,10 @@ def test_legged_run_hash_matches_and_debug_vis_draws_samples(tmp_path, root, kes
     assert r.returncode == 0, r.stderr
     assert _hash_line(r.stdout) == _hash_line(out.getvalue())
     rec = record.read_recording(str(tmp_path / "go2.mcap"))
-    fr = rec.frames[-1]
-    assert fr.robots["feet_pos_w"].shape == (1, 4, 3)
+    assert rec.frames[-1].robots["feet_pos_w"].shape == (1, 4, 3)
+    assert len(rec.frames) == 21
     rv = viewer.ReplayView(rec, port=0)
     try:
-        rv.show(len(rec.frames) - 1)
-        rv.viewer.draw_debug_vis(height_samples=True, contacts=True)
-        hs = rv.viewer.scene._handle_from_node_name["/debug/height_samples"]
-        nh = len(rec.scene["info"]["height_points_x_b"])
-        assert len(hs.points) == nh and nh > 0
-        # The samples lie on the terrain the frame measured.
-        np.testing.assert_allclose(np.sort(hs.points[:, 2]), np.sort(fr.robots["measured_heights"][0]), atol=1e-5)
-        # Standing on its feet, some foot touches the ground: contact points and force segments.
-        cp = rv.viewer.scene._handle_from_node_name["/debug/contacts"]
-        assert len(cp.points) >= 1
         # The time slider moves the drawn frame.
         rv.slider.value = 3
         deadline = time.monotonic() + 5
@@ -273,3 +263,51 @@ def test_legged_run_hash_matches_and_debug_vis_draws_samples(tmp_path, root, kes
         assert rv.viewer._frame.step == rec.frames[3].step
     finally:
         rv.viewer.close()
+
+
+def test_draw_debug_vis_draws_height_samples_and_contacts():
+    sim = kestrel.make_simulator({
+        "sim": "fast_sim", "robot": "go2", "task": "joint_targets",
+        "env": {"name": "empty", "terrain": {"type": "heightfield", "procedural": "random_uniform", "length_x_m": 8,
+                                             "width_y_m": 8, "min_height_m": -0.03, "max_height_m": 0.03,
+                                             "height_step_m": 0.005, "measure_heights": True}}}, num_envs=1, seed=1, threads=1)
+    for _ in range(40):
+        sim.step(None)
+    fr = record.capture_frame(sim, [0], 40, 0.8)
+    info = sim.scene_info()
+    assert info["terrain"] == "heightfield" and info["heights_m"].ndim == 2
+    v = viewer.Viewer(info, 1, [0], port=0)
+    try:
+        v.draw(fr)
+        v.draw_debug_vis(height_samples=True, contacts=True)
+        nodes = v.scene._handle_from_node_name
+        hs = nodes["/debug/height_samples"].points
+        assert len(hs) == sim.measured_heights.shape[1] > 0
+        # The samples are drawn on the terrain the robot measured, around the robot.
+        # (viser keeps point clouds in float16: a few mm at these sizes)
+        np.testing.assert_allclose(np.sort(hs[:, 2]), np.sort(fr.robots["measured_heights"][0]), atol=2e-3)
+        assert np.abs(hs[:, :2].mean(0) - fr.robots["pos_w"][0, :2]).max() < 0.5
+        # Standing on its feet: foot contacts with their forces, drawn from the feet.
+        cp = nodes["/debug/contacts"].points
+        assert len(cp) >= 2
+        feet = fr.robots["feet_pos_w"][0]
+        assert min(np.linalg.norm(feet - cp[0], axis=1)) < 2e-3
+        segs = nodes["/debug/contact_forces"].points
+        assert segs.shape[1:] == (2, 3) and (segs[:, 1, 2] > segs[:, 0, 2]).all()  # the ground pushes up
+        v.draw_debug_vis(height_samples=False, contacts=False)
+        assert len(nodes["/debug/height_samples"].points) == 0
+    finally:
+        v.close()
+
+
+def test_task_run_with_record_has_the_cxx_hash(tmp_path, kestrel_cli):
+    args = ["--task", "navigation_task", "--envs", "2", "--steps", "30", "--threads", "1", "--seed", "1"]
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert record.run_main(args + ["--out", str(tmp_path / "py"), "--record", str(tmp_path / "nav.mcap")]) == 0
+    r = subprocess.run([str(kestrel_cli), "run", *args, "--out", str(tmp_path / "cxx"), "--quiet"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert _hash_line(r.stdout) == _hash_line(out.getvalue())
+    rec = record.read_recording(str(tmp_path / "nav.mcap"))
+    assert len(rec.frames) == 31 and rec.frames[-1].robots["actions"].shape == (2, 4)
