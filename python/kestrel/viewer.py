@@ -514,13 +514,14 @@ class LiveView:
                  teleop: bool = False, host: str = "127.0.0.1", images: bool = True):
         self.run, self.envs, self.images = run, list(envs), images
         sim = run.sim
+        # Teleop's checks first: a refusal then leaves no server behind.
+        self.teleop = Teleop(run, row=self.envs[0] * sim.robots_per_env) if teleop else None
         bounds = [sim.env_bounds(e) for e in self.envs] if sim.backend == "rigid" else []
         spacing = max([float(hi[0] - lo[0]) for lo, hi in bounds] + [float(hi[1] - lo[1]) for lo, hi in bounds] + [4.0]) + 2.0
         self.viewer = Viewer(sim.scene_info(), sim.robots_per_env, self.envs, host=host, port=port, env_spacing_m=spacing)
         self.rate = float(rate) if rate else 1.0 / max(run.env_step_s, 1e-6)
         if not self.rate > 0:
             raise ValueError(f"rate: expected env-steps per second > 0, got {rate}")
-        self.teleop = Teleop(run, row=self.envs[0] * sim.robots_per_env) if teleop else None
         if self.teleop is not None:
             self._bind_teleop()
         self.paused = False
