@@ -6,7 +6,8 @@ KESTREL_PACKAGES="build-essential cmake ninja-build pkg-config python3 libeigen3
 libbenchmark-dev gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib \
 binutils-arm-none-eabi qemu-system-arm qemu-system-misc gcc-riscv64-unknown-elf binutils-riscv64-unknown-elf \
 picolibc-riscv64-unknown-elf libstdc++-arm-none-eabi-dev \
-clang libclang-rt-14-dev libembree-dev libfcl-dev libccd-dev libyaml-cpp-dev libbox2d-dev libpng-dev libmujoco-dev libtinyxml2-dev"
+clang libclang-rt-14-dev libembree-dev libfcl-dev libccd-dev libyaml-cpp-dev libbox2d-dev libpng-dev libmujoco-dev libtinyxml2-dev \
+chromium"  # chromium: headless, for the viewer's browser test (python/tests/test_viewer.py)
 missing=""
 for p in $KESTREL_PACKAGES; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -2,6 +2,8 @@
 
     kestrel train TASK --learner rsl_rl --envs 256 --seed 0 --out runs/ps   # kestrel.train
     kestrel export --rsl-rl CKPT ... --onnx policy.onnx --header policy.hpp  # kestrel.export
+    kestrel view [SCENARIO] | --replay run.mcap; kestrel teleop [SCENARIO]   # kestrel.viewer
+    kestrel run SCENARIO --record run.mcap [--view]                          # kestrel.record
 
 `kestrel run SCENARIO` and the other scenario commands are the C++ CLI (build/host/sim/kestrel),
 which this command does not replace: any other command is handed to that program (KESTREL_CLI, or
@@ -16,6 +18,8 @@ import sys
 _COMMANDS = {
     "train": "train a policy with rsl_rl or Stable-Baselines3: progress bar, evaluations, checkpoints, TensorBoard, CSV, plot, ONNX",
     "export": "export a trained actor to a C++ header (firmware) and/or ONNX",
+    "view": "the 3-D viewer in a browser page (viser): a live run, or --replay FILE with a time slider",
+    "teleop": "the viewer with robot 0 of env 0 driven from the page's keyboard and mouse",
 }
 
 
@@ -40,6 +44,15 @@ def main(argv: list[str] | None = None) -> int:
         from .export import main as export_main
 
         return export_main(rest, prog="kestrel export")
+    if cmd in ("view", "teleop"):
+        from .viewer import view_main
+
+        return view_main(rest, prog=f"kestrel {cmd}", teleop=cmd == "teleop")
+    if cmd == "run" and any(a == "--view" or a == "--record" or a.startswith("--record=") for a in rest):
+        # A recording or the viewer needs every step's state: the run goes through the bindings (kestrel.record).
+        from .record import run_main
+
+        return run_main(rest)
     cxx = os.environ.get("KESTREL_CLI") or os.path.join("build", "host", "sim", "kestrel")
     if os.path.isfile(cxx) and os.access(cxx, os.X_OK):
         os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel run / list / ...

@@ -29,12 +29,16 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/allocation/presets.hpp"
+#include "kestrel/robots/multirotor.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
+#include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/world.hpp"
+#include "kestrel/sim/world_model.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -184,7 +188,8 @@ nb::dict infos_dict(const ks::TaskInfos& in) {
 // ---- Simulator ---------------------------------------------------------------------------------------
 
 struct KSimulator {
-  std::unique_ptr<ks::Simulator> sim;
+  std::unique_ptr<ks::Simulator> owned;  // null for a Task's simulator (Task.simulator), which the Task owns
+  ks::Simulator* sim = nullptr;
   std::size_t robots() const { return static_cast<std::size_t>(sim->num_robots()); }
 };
 
@@ -355,6 +360,182 @@ nb::list registry_list(const ks::Registry<T>& r) {
   return out;
 }
 
+
+// ---- What the viewer and the recorder read (python/kestrel/viewer.py, record.py) ---------------------
+// Copies, not views: they are read once per drawn frame or recorded step, and the obstacle slots
+// of an environment are an array of structs whose shapes a viewer needs in one piece.
+
+const ks::World& rigid_or_raise(const ks::Simulator& sim, const char* what) {
+  const ks::World* w = ks::rigid_world(sim);
+  if (w == nullptr)
+    throw nb::value_error((std::string(what) + ": the " + sim.backend_name() +
+                           " simulator keeps its obstacles and motors in Box2D, not in a WorldData; use simulator: rigid")
+                              .c_str());
+  return *w;
+}
+
+template <class T>
+nb::ndarray<nb::numpy, T> owned_array(std::vector<T>&& v, std::initializer_list<std::size_t> shape_list) {
+  auto* heap = new std::vector<T>(std::move(v));
+  nb::capsule owner(heap, [](void* q) noexcept { delete static_cast<std::vector<T>*>(q); });
+  std::size_t shape[4] = {0, 0, 0, 0};
+  std::size_t nd = 0;
+  for (std::size_t d : shape_list) shape[nd++] = d;
+  return nb::ndarray<nb::numpy, T>(heap->data(), nd, shape, owner);
+}
+
+/// Environment env's obstacles in use: shape type (0 sphere, 1 box, 2 capsule, 3 cylinder,
+/// 4 convex hull; sim/config.hpp ShapeType), sizes, pose, semantic id, asset kind and class, and
+/// each convex hull's body-frame vertices.
+nb::dict obstacle_arrays(const ks::Simulator& sim, int env) {
+  const ks::World& w = rigid_or_raise(sim, "obstacles");
+  if (env < 0 || env >= sim.num_envs())
+    throw nb::value_error(("env: expected an env index in [0, " + std::to_string(sim.num_envs()) + "), got " + std::to_string(env)).c_str());
+  const ks::WorldModel& m = w.model();
+  const ks::WorldData& d = w.data();
+  const std::size_t n = m.obstacle_capacity > 0 ? static_cast<std::size_t>(d.num_obstacles[static_cast<std::size_t>(env)]) : 0;
+  const ks::Obstacle* o = n > 0 ? d.env_obstacles(env, m.obstacle_capacity) : nullptr;
+  std::vector<std::int32_t> type(n), semantic(n), kind(n), cls(n);
+  std::vector<double> radius(n), half_length(n), half_extents(3 * n), pos(3 * n), quat(4 * n);
+  nb::list hulls;
+  for (std::size_t i = 0; i < n; ++i) {
+    const ks::Shape& s = o[i].shape;
+    type[i] = static_cast<std::int32_t>(s.type);
+    semantic[i] = o[i].semantic_id;
+    kind[i] = static_cast<std::int32_t>(o[i].kind);
+    cls[i] = o[i].class_index;
+    radius[i] = static_cast<double>(s.radius_m);
+    half_length[i] = static_cast<double>(s.half_length_m);
+    for (int k = 0; k < 3; ++k) {
+      half_extents[3 * i + k] = static_cast<double>(s.half_extents_m[k]);
+      pos[3 * i + k] = static_cast<double>(s.position_w[k]);
+    }
+    for (int k = 0; k < 4; ++k) quat[4 * i + k] = static_cast<double>(s.orientation_wb.coeffs()[k]);  // Eigen's coeffs: x y z w
+    std::vector<double> v(3 * static_cast<std::size_t>(s.type == ks::ShapeType::convex_hull ? s.num_vertices : 0));
+    for (std::size_t k = 0; k < v.size() / 3; ++k)
+      for (int c = 0; c < 3; ++c) v[3 * k + c] = static_cast<double>(s.vertices[k][c]);
+    const std::size_t nv = v.size() / 3;
+    hulls.append(owned_array(std::move(v), {nv, 3}));
+  }
+  nb::dict out;
+  out["type"] = owned_array(std::move(type), {n});
+  out["radius_m"] = owned_array(std::move(radius), {n});
+  out["half_length_m"] = owned_array(std::move(half_length), {n});
+  out["half_extents_m"] = owned_array(std::move(half_extents), {n, 3});
+  out["position_w"] = owned_array(std::move(pos), {n, 3});
+  out["orientation_xyzw"] = owned_array(std::move(quat), {n, 4});
+  out["semantic_id"] = owned_array(std::move(semantic), {n});
+  out["asset_kind"] = owned_array(std::move(kind), {n});
+  out["asset_class"] = owned_array(std::move(cls), {n});
+  out["hull_vertices_b"] = hulls;
+  return out;
+}
+
+/// The robot's drawable geometry from the config and the compiled model: collision shape, rotor
+/// hubs and axes (body frame), spin directions, thrust limits; the terrain's height field; the
+/// body-frame offsets of the height points.
+nb::dict scene_info(const ks::Simulator& sim) {
+  const ks::WorldConfig& c = sim.config();
+  nb::dict out;
+  out["robot_name"] = c.robot.name;
+  out["robot_kind"] = c.robot.kind == kestrel::robots::RobotKind::articulated      ? "articulated"
+                      : c.robot.kind == kestrel::robots::RobotKind::ground_vehicle ? "ground_vehicle"
+                                                                                   : "multirotor";
+  out["robot_model_file"] = c.robot.model_file;
+  nb::dict shape;
+  shape["type"] = static_cast<int>(c.robot.shape.type);
+  shape["radius_m"] = static_cast<double>(c.robot.shape.radius_m);
+  shape["half_length_m"] = static_cast<double>(c.robot.shape.half_length_m);
+  shape["half_extents_m"] = nb::make_tuple(static_cast<double>(c.robot.shape.half_extents_m.x()),
+                                           static_cast<double>(c.robot.shape.half_extents_m.y()),
+                                           static_cast<double>(c.robot.shape.half_extents_m.z()));
+  out["robot_shape"] = shape;
+  // Rotor geometry as compile_multirotor takes it: the URDF's rotors over the airframe preset's.
+  std::vector<double> rpos, raxis, rdir;
+  if (c.robot.kind == kestrel::robots::RobotKind::multirotor) {
+    const kestrel::allocation::AirframeSpec& spec = kestrel::allocation::airframe_spec(c.robot.airframe);
+    const bool urdf = !c.robot.rotors.empty();
+    const int nr = urdf ? static_cast<int>(c.robot.rotors.size())
+                        : (spec.source == kestrel::allocation::AirframeSource::rotor_geometry ? spec.num_rotors : 0);
+    for (int k = 0; k < nr; ++k) {
+      const kestrel::allocation::RotorSpec& r = urdf ? c.robot.rotors[static_cast<std::size_t>(k)] : spec.rotors[k];
+      for (int j = 0; j < 3; ++j) {
+        rpos.push_back(static_cast<double>(r.position_b_m[j]));
+        raxis.push_back(static_cast<double>(r.axis_b[j]));
+      }
+      rdir.push_back(urdf ? c.robot.rotor_directions[static_cast<std::size_t>(k)] : spec.direction[k]);
+    }
+  }
+  const std::size_t nr = rdir.size();
+  out["rotor_position_b_m"] = owned_array(std::move(rpos), {nr, 3});
+  out["rotor_axis_b"] = owned_array(std::move(raxis), {nr, 3});
+  out["rotor_direction"] = owned_array(std::move(rdir), {nr});
+  const ks::World* w = ks::rigid_world(sim);
+  out["terrain"] = "plane";
+  // The World's terrain; backends without a World (articulated robots) build theirs from the same
+  // config and seed, so a second build here gives the same heights.
+  std::unique_ptr<ks::Terrain> own;
+  const ks::Terrain* tp = w != nullptr && w->model().terrain ? w->model().terrain.get() : nullptr;
+  if (tp == nullptr && w == nullptr && sim.backend() == ks::Backend::rigid && c.env.terrain.type == ks::TerrainType::heightfield) {
+    std::string err;
+    if (ks::Terrain::build(c.env.terrain, c.seed, own, err)) tp = own.get();
+  }
+  if (tp != nullptr) {
+    const ks::Terrain& t = *tp;
+    out["terrain"] = t.type() == ks::TerrainType::heightfield ? "heightfield" : t.type() == ks::TerrainType::trimesh ? "trimesh" : "plane";
+    if (t.type() == ks::TerrainType::heightfield) {
+      std::vector<double> h(t.heights().begin(), t.heights().end());
+      out["heights_m"] = owned_array(std::move(h), {static_cast<std::size_t>(t.ny()), static_cast<std::size_t>(t.nx())});
+      out["height_spacing_m"] = static_cast<double>(t.spacing_m());
+      out["height_corner_w"] = nb::make_tuple(static_cast<double>(t.corner_w().x()), static_cast<double>(t.corner_w().y()),
+                                              static_cast<double>(t.corner_w().z()));
+    }
+  }
+  // measured_heights' points, x-major over env.terrain.measured_points_x_m x _y_m (as every backend lays them).
+  std::vector<double> hx, hy;
+  if (sim.num_height_points() > 0)
+    for (real x : c.env.terrain.measured_points_x_m)
+      for (real y : c.env.terrain.measured_points_y_m) {
+        hx.push_back(static_cast<double>(x));
+        hy.push_back(static_cast<double>(y));
+      }
+  const std::size_t nh = hx.size();
+  out["height_points_x_b"] = owned_array(std::move(hx), {nh});
+  out["height_points_y_b"] = owned_array(std::move(hy), {nh});
+  nb::list links;
+  for (const std::string& l : sim.robot_layout().link_names) links.append(l);
+  out["link_names"] = links;
+  return out;
+}
+
+/// Every robot's motor thrusts after the last physics step (N; num_robots x rotors) and its
+/// latched fault bits (kernel/status.hpp Fault; multirotor_faults over controller, allocator and
+/// motors). Rigid multirotors; other robots have no rotors (0 columns, zero faults).
+nb::tuple motor_arrays(const ks::Simulator& sim) {
+  const ks::World& w = rigid_or_raise(sim, "motor_thrusts");
+  const ks::WorldData& d = w.data();
+  const std::size_t n = static_cast<std::size_t>(sim.num_robots());
+  const bool mr = sim.config().robot.kind == kestrel::robots::RobotKind::multirotor;
+  const std::size_t nm = mr && n > 0 ? static_cast<std::size_t>(std::max(0, d.mr_state[0].motors.num_motors)) : 0;
+  std::vector<double> thrust(n * nm);
+  std::vector<std::uint32_t> faults(n, 0);
+  for (std::size_t i = 0; i < n && mr; ++i) {
+    for (std::size_t k = 0; k < nm; ++k) thrust[i * nm + k] = static_cast<double>(d.mr_state[i].motors.thrust_N[k]);
+    faults[i] = kestrel::robots::multirotor_faults(d.mr_state[i]);
+  }
+  return nb::make_tuple(owned_array(std::move(thrust), {n, nm}), owned_array(std::move(faults), {n}));
+}
+
+/// `kestrel run`'s joint targets for articulated robots (sim/src/runtime/run_scripted.cpp): one
+/// stream per robot, uniform in [-1, 1], redrawn every 25 env-steps; the same draws, so a run
+/// driven from Python reproduces the C++ run's state hash.
+struct ScriptedJointTargets {
+  std::vector<kestrel::RngStream> rng;
+  std::size_t robots = 0, dofs = 0;
+  std::vector<real> actions;
+  long long step = 0;
+};
+
 }  // namespace
 
 void bind_policy(nb::module_& m);  // policy_py.cpp
@@ -413,6 +594,15 @@ NB_MODULE(_core, m) {
             if (v < 1) throw nb::value_error(("episode_len_env_steps: expected an integer >= 1, got " + std::to_string(v)).c_str());
             c.cfg.task.episode_len_env_steps = v;
           })
+      .def_prop_rw(
+          "setpoint_speed_m_s", [](const KConfig& c) { return static_cast<double>(c.cfg.task.setpoint_speed_m_s); },
+          [](KConfig& c, double v) {
+            // Teleoperation (kestrel.viewer.Teleop) sets 0: a moving setpoint would overwrite its commands.
+            if (!(v >= 0) || !std::isfinite(v))
+              throw nb::value_error(("setpoint_speed_m_s: expected a finite number >= 0 (m/s; 0: no moving setpoint), got " +
+                                     std::to_string(v)).c_str());
+            c.cfg.task.setpoint_speed_m_s = static_cast<real>(v);
+          })
       .def_prop_ro("task", [](const KConfig& c) { return c.cfg.task.name; })
       .def_prop_ro("controller", [](const KConfig& c) { return c.cfg.controller.name; })
       .def_prop_ro("env", [](const KConfig& c) { return c.cfg.env.name; })
@@ -461,6 +651,15 @@ NB_MODULE(_core, m) {
       .def_prop_ro("success_radius_m", [](KTask& p) { return static_cast<double>(p.cfg.task.success_radius_m); })
       .def_prop_ro("episode_len_env_steps", [](KTask& p) { return p.cfg.task.episode_len_env_steps; })
       .def_prop_ro("state_hash", [](KTask& p) { return p.t().state_hash(); })
+      .def_prop_ro(
+          "simulator",
+          [](KTask& p) {
+            // A non-owning Simulator over the task's own; keep_alive below holds the task while it lives.
+            return new KSimulator{nullptr, &p.t().simulator()};
+          },
+          nb::rv_policy::take_ownership, nb::keep_alive<0, 1>(),
+          "The Simulator the task steps (its views, world_data(), obstacles(), ...), kept alive with the task.\n"
+          "Read it between task steps; stepping or resetting it yourself changes the task's episodes.")
       .def_prop_ro(
           "infos",
           [](KTask& p) {
@@ -579,7 +778,8 @@ NB_MODULE(_core, m) {
               s = ks::make_simulator(c.cfg, b, err);
             }
             if (!s) throw nb::value_error((c.source + ": " + err).c_str());
-            new (self) KSimulator{std::move(s)};
+            ks::Simulator* raw = s.get();
+            new (self) KSimulator{std::move(s), raw};
           },
           "config"_a, "backend"_a = "")
       .def_prop_ro("backend", [](KSimulator& s) { return std::string(s.sim->backend_name()); })
@@ -839,5 +1039,43 @@ NB_MODULE(_core, m) {
           "Puts exact root states for the listed envs (robots_per_env rows each; arrays of the real dtype,\n"
           "kestrel._core.real_dtype): positions (m, world), unit quaternions xyzw, velocities (world; None = 0).\n"
           "The sensor images are re-rendered at the next step or update_sensors(). ValueError (nothing changed)\n"
-          "for a state the backend cannot represent.");
+          "for a state the backend cannot represent.")
+      .def(
+          "obstacles", [](KSimulator& s, int env) { return obstacle_arrays(*s.sim, env); }, "env"_a = 0,
+          "Rigid only: environment env's obstacles in use as a dict of copied arrays: type (0 sphere, 1 box,\n"
+          "2 capsule, 3 cylinder, 4 convex hull), radius_m, half_length_m (capsule / cylinder, axis = local z),\n"
+          "half_extents_m (box), position_w, orientation_xyzw, semantic_id, asset_kind, asset_class, and\n"
+          "hull_vertices_b (a list: each convex hull's body-frame vertices, (0, 3) for other shapes).")
+      .def("scene_info", [](KSimulator& s) { return scene_info(*s.sim); },
+           "What does not change while the simulator lives: the robot's name, kind, collision shape, rotor hubs,\n"
+           "axes and spin directions (body frame), the terrain (heights_m (ny, nx), height_spacing_m,\n"
+           "height_corner_w for a height field), the height points' body-frame offsets, the link names.")
+      .def("motor_state", [](KSimulator& s) { return motor_arrays(*s.sim); },
+           "Rigid only: (thrust_N (num_robots, rotors) float64, faults (num_robots,) uint32): each motor's thrust\n"
+           "after the last physics step and the latched fault bits of its chain (kestrel.FAULT_BITS names them).");
+
+  nb::class_<ScriptedJointTargets>(m, "ScriptedJointTargets",
+                                   "`kestrel run`'s random joint targets for articulated robots, the C++ run's draws.")
+      .def(
+          "__init__",
+          [](ScriptedJointTargets* self, KSimulator& s) {
+            new (self) ScriptedJointTargets();
+            self->robots = s.robots();
+            self->dofs = static_cast<std::size_t>(s.sim->num_dofs());
+            if (self->dofs == 0) throw nb::value_error("sim: ScriptedJointTargets needs an articulated robot (num_dofs > 0)");
+            for (std::size_t i = 0; i < self->robots; ++i)
+              self->rng.emplace_back(s.sim->config().seed, static_cast<std::uint32_t>(i), ks::kPurposeScriptedTargets);
+            self->actions.assign(self->robots * self->dofs, real(0));
+          },
+          "sim"_a)
+      .def(
+          "next",
+          [](ScriptedJointTargets& t) {
+            if (t.step++ % 25 == 0)
+              for (std::size_t i = 0; i < t.robots; ++i)
+                for (std::size_t j = 0; j < t.dofs; ++j) t.actions[i * t.dofs + j] = t.rng[i].uniform(-1, 1);
+            std::vector<real> copy(t.actions);
+            return owned_array(std::move(copy), {t.robots, t.dofs});
+          },
+          "The actions of the next env-step, (num_robots, num_dofs) of the real dtype.");
 }
