@@ -230,7 +230,7 @@ def plot_trajectory(out_dir: str, png: str | None = None) -> str:
         budget = max(2, MAX_POINTS_PER_ENV // max(1, len(eps)))
         for seg in eps[:-1]:
             seg = _thin(seg, budget)
-            ax.plot([_num(r["x_m"]) for r in seg], [_num(r["y_m"]) for r in seg], color=colour, alpha=0.25, linewidth=0.8)
+            ax.plot([_num(r["x_m"]) for r in seg], [_num(r["y_m"]) for r in seg], color=colour, alpha=0.4, linewidth=1.0)
         last = _thin(eps[-1], MAX_POINTS_PER_ENV)
         lx, ly = [_num(r["x_m"]) for r in last], [_num(r["y_m"]) for r in last]
         ax.plot(lx, ly, color=colour, linewidth=1.8)
@@ -263,7 +263,7 @@ def plot_trajectory(out_dir: str, png: str | None = None) -> str:
         ax.add_artist(AnchoredSizeBar(ax.transData, length, f"{length:g} m", "lower right", pad=0.4, sep=3, frameon=True,
                                       size_vertical=0, fontproperties={"size": 8}))
     handles = [Line2D([], [], color="0.3", linewidth=1.8, label="last episode's path (colour per env)"),
-               Line2D([], [], color="0.3", alpha=0.3, linewidth=0.8, label="earlier episodes" +
+               Line2D([], [], color="0.3", alpha=0.4, linewidth=1.0, label="earlier episodes" +
                       (" (other obstacle layouts)" if have_obstacles else "")),
                Line2D([], [], marker="o", markersize=8, color="tab:green", markeredgecolor="black", linestyle="none",
                       label="start (first logged position)"),

@@ -143,6 +143,8 @@ def test_episodes_split_by_column_or_by_jump():
 
 
 def test_learning_curves_from_a_log(tmp_path):
+    import numpy as np
+
     log = tmp_path / "log.csv"
     with open(log, "w", newline="") as f:
         w = csv.writer(f)
@@ -157,7 +159,7 @@ def test_learning_curves_from_a_log(tmp_path):
     w, h, text = png_info(tmp_path / "curves.png")
     assert (w, h) == (1485, 440) and text.get("Software", "").startswith("Matplotlib")
     img, cols = colours(tmp_path / "curves.png")
-    green = ((img[..., 1] > 0.45) & (img[..., 0] < 0.3) & (img[..., 2] < 0.3)).sum()
+    green = ((img[..., 1] - np.maximum(img[..., 0], img[..., 2])) > 0.25).sum()
     assert green > 50  # the dashed target line (tab:green) of --target-success
 
 
