@@ -6,7 +6,8 @@
 #     image's flash/RAM use; then the trained position policy flying the same vehicle beside Lee;
 #  2. the simulation harness's embedded default scenario (`kestrel run`: 1024 quadrotors flying
 #     position setpoints through the forest), printing its summary and state hash and writing
-#     CSV logs and a trajectory plot to build/kestrel-run/.
+#     CSV logs to build/kestrel-run/, then its trajectory plot (matplotlib, python/kestrel/plots.py,
+#     run as a script with .venv's Python: no need to build the Python package for it).
 # Installs missing Debian packages first.
 set -eu
 cd "$(dirname "$0")/.."
@@ -40,4 +41,5 @@ sh platform/cortex-m/run-qemu.sh --machine mps2-an386 --elf "$elf" --name kestre
 
 echo
 echo "== simulation harness: kestrel run (embedded default scenario)"
-./build/host/sim/kestrel run --out build/kestrel-run
+KESTREL_PLOT_BY_CALLER=1 ./build/host/sim/kestrel run --out build/kestrel-run
+.venv/bin/python python/kestrel/plots.py build/kestrel-run

@@ -5,16 +5,15 @@ so a change in cost shows up in review as a diff of committed text and images. T
 micro-benchmarks (bench/results/host/micro.csv, written by bench/micro/run.sh) get their own
 section and host/micro.png (render_host_micro).
 
-Standard library only (no matplotlib on the build machines): the PNG is drawn pixel by pixel
-and written with zlib. Targets from the issue are checked in the report, not asserted here.
-    python3 bench/control/render.py [results dir]
+The charts are matplotlib's (pinned in python/requirements.txt, installed in .venv/ by
+scripts/deps.sh): labelled bars, units, the targets. Targets from the issue are checked in the
+report, not asserted here.
+    .venv/bin/python bench/control/render.py [results dir]
 """
 import csv
 import math
 import os
-import struct
 import sys
-import zlib
 
 TARGETS = {  # issue 6: Kestrel's targets on the emulated Cortex-M4F (instructions, bytes)
     ("cascade_lee_position_desat_motors", "base_quadrotor"): 1500,
@@ -39,24 +38,50 @@ POLICY_TARGET_BOARDS = ("cortex-m4f", "netduinoplus2")
 POLICY_FLASH_TARGET = 22 * 1024
 
 
-def png(path, rows, width=640, bar_h=14):
-    """Horizontal bars of log-free linear length, one per row (label drawn by the markdown)."""
-    height = bar_h * len(rows) + 4
-    vmax = max(v for _, v in rows) or 1.0
-    img = [[(255, 255, 255)] * width for _ in range(height)]
-    for i, (_, v) in enumerate(rows):
-        n = int((width - 4) * v / vmax)
-        for y in range(2 + i * bar_h + 2, 2 + (i + 1) * bar_h - 2):
-            for x in range(2, 2 + n):
-                img[y][x] = (40, 90, 170) if i % 2 == 0 else (70, 130, 200)
-    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in img)
+def _pyplot():
+    try:
+        import matplotlib
+    except ImportError:
+        sys.exit("render: matplotlib is missing: run this with .venv/bin/python (scripts/deps.sh installs it "
+                 "from python/requirements.txt)")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
 
-    def chunk(tag, data):
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+def png(path, rows, title):
+    """Horizontal bars, one per (label, instructions per call, target or None) row, in the table's
+    order from the top; log scale (the rows span 200 to 200,000 instructions), each bar labelled
+    with its value, a row's target as a red dashed mark across its bar."""
+    plt = _pyplot()
+    from matplotlib.lines import Line2D
+
+    n = len(rows)
+    fig, ax = plt.subplots(figsize=(10, 0.28 * n + 1.6), layout="constrained")
+    ys = list(range(n))
+    vals = [v for _, v, _ in rows]
+    ax.barh(ys, vals, color=["#2f5aa8" if i % 2 == 0 else "#5b8fd0" for i in ys], height=0.72)
+    ax.set_xscale("log")
+    vmax = max(vals + [t for _, _, t in rows if t]) if rows else 10
+    ax.set_xlim(min(vals) / 2 if vals else 1, vmax * 4)
+    any_target = False
+    for y, (_, v, t) in zip(ys, rows):
+        if t:
+            any_target = True
+            ax.plot([t, t], [y - 0.48, y + 0.48], color="tab:red", linestyle="--", linewidth=1.6)
+        # The value after the bar (and after the target mark, where it is further right).
+        label = f"{v:,.0f}" + (f"  (target <= {t:,}: {'met' if v <= t else 'NOT met'})" if t else "")
+        ax.text(max(v, t or 0) * 1.08, y, label, va="center", fontsize=7, color="tab:red" if t and v > t else "black")
+    ax.set_yticks(ys, [label for label, _, _ in rows], fontsize=7.5)
+    ax.invert_yaxis()
+    ax.set_xlabel("instructions per call (log scale; QEMU -icount shift=0, GCC -O2)")
+    ax.grid(axis="x", which="both", alpha=0.25)
+    ax.set_title(title, fontsize=10, loc="left")
+    if any_target:
+        ax.legend(handles=[Line2D([], [], color="tab:red", linestyle="--", label="target (issue 6 / 11)")], loc="lower right",
+                  fontsize=8)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
 
 
 def short_symbol(name):
@@ -194,39 +219,38 @@ def render_host_micro(results):
         out.append(f"| {key[0]} | {key[1]} | " + " | ".join(cells) +
                    f" | {ips:.3g} | {first.get('cv_percent', '')} | {m4f.get(key, '')} |")
         groups.append([float(c) if c else 0.0 for c in cells])
-    _host_micro_png(os.path.join(results, "host", "micro.png"), groups)
+    _host_micro_png(os.path.join(results, "host", "micro.png"), [f"{f} ({a})" for f, a in order], groups, batches)
     out += ["", "![host micro](host/micro.png) (per row of the table, bars for N = " + ", ".join(map(str, batches)) +
-            " in dark to light blue; log scale, grey lines at 1 ns, 10 ns, 100 ns, 1 us, 10 us)", ""]
+            " in dark to light blue; ns per call, log scale)", ""]
     return out
 
 
-def _host_micro_png(path, groups, width=640, bar_h=6, gap=5):
-    """Grouped horizontal bars, log10 of ns from 1 ns to the largest value (decade lines in grey)."""
-    colours = [(30, 70, 150), (70, 130, 200), (150, 190, 230)]
-    n = max((len(g) for g in groups), default=1)
-    height = len(groups) * (n * bar_h + gap) + gap
-    vmax = max((v for g in groups for v in g), default=10.0)
-    span = math.log10(max(vmax, 10.0))
-    img = [[(255, 255, 255)] * width for _ in range(height)]
-    for d in range(int(span) + 1):
-        x = 2 + int((width - 4) * d / span)
-        for y in range(height):
-            img[y][min(x, width - 1)] = (200, 200, 200)
-    for i, g in enumerate(groups):
-        for j, v in enumerate(g):
-            length = int((width - 4) * math.log10(v) / span) if v > 1 else 0
-            y0 = gap + i * (n * bar_h + gap) + j * bar_h
-            for y in range(y0, y0 + bar_h - 1):
-                for x in range(2, 2 + length):
-                    img[y][x] = colours[j % len(colours)]
-    raw = b"".join(b"\x00" + bytes(c for px in row for c in px) for row in img)
-
-    def chunk(tag, data):
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+def _host_micro_png(path, labels, groups, batches):
+    """Grouped horizontal bars: per function x airframe (one row of the table), one bar per batch
+    size N, ns per call on a log scale, each bar labelled with its value."""
+    plt = _pyplot()
+    colours = ["#1e4696", "#4682c8", "#96bee6"]
+    n = len(batches)
+    h = 0.8 / max(1, n)
+    fig, ax = plt.subplots(figsize=(10, 0.42 * len(groups) + 1.8), layout="constrained")
+    for j, b in enumerate(batches):
+        ys = [i + (j - (n - 1) / 2) * h for i in range(len(groups))]
+        vals = [g[j] if j < len(g) else 0.0 for g in groups]
+        ax.barh(ys, vals, height=h * 0.95, color=colours[j % len(colours)], label=f"N = {b} lane{'s' if b != 1 else ''}")
+        for y, v in zip(ys, vals):
+            if v > 0:
+                ax.text(v * 1.05, y, f"{v:,.0f}" if v >= 100 else f"{v:.3g}", va="center", fontsize=5.5)
+    ax.set_xscale("log")
+    top = max((v for g in groups for v in g), default=10.0)
+    ax.set_xlim(right=top * 2.5)
+    ax.set_yticks(range(len(groups)), labels, fontsize=7.5)
+    ax.invert_yaxis()
+    ax.set_xlabel("CPU time per call (ns, log scale; median of the repetitions)")
+    ax.grid(axis="x", which="both", alpha=0.25)
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title("host micro-benchmarks (Google Benchmark, bench/micro): ns per call by batch size", fontsize=10, loc="left")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
 
 
 def main():
@@ -254,9 +278,11 @@ def main():
             verdict = "" if t is None else (f"<= {t}: met" if v <= t else f"<= {t}: NOT met")
             out.append(f"| {r['function']} | {r['airframe']} | {v:.1f} | {r['stack_bytes']} | {verdict} |")
             if r["function"] not in ("pseudo_inverse", "build_allocation_model"):
-                bars.append((r["function"], v))
-        png(os.path.join(results, target, "control.png"), bars)
-        out += ["", f"![{target}]({target}/control.png) (bars: the table's rows in order, one-time pseudo-inverse rows left out)", ""]
+                bars.append((f"{r['function']} ({r['airframe']})", v, t))
+        png(os.path.join(results, target, "control.png"), bars,
+            f"{target}: instructions per call\n(the table's rows; one-time pseudo-inverse rows left out)")
+        out += ["", f"![{target}]({target}/control.png) (bars: the table's rows in order, one-time pseudo-inverse rows left out; "
+                    "log scale, targets dashed red)", ""]
         mem = os.path.join(results, target, "memory.csv")
         if os.path.isfile(mem):
             with open(mem) as f:

@@ -13,7 +13,9 @@
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
+# The project's .venv (matplotlib for render.py's charts) when there, else python3 (PYTHON overrides).
 py=${PYTHON:-python3}
+[ -z "${PYTHON:-}" ] && [ -x "$root/.venv/bin/python" ] && py="$root/.venv/bin/python"
 
 if [ "${1:-}" = "--smoke" ]; then
   exe=${2:?usage: run.sh --smoke <kestrel_bench_micro> <out dir>}

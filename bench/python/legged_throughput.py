@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 import kestrel
+from kestrel.progress import Progress
 
 
 def main():
@@ -25,9 +26,13 @@ def main():
     p.add_argument("--envs", type=int, default=4096)
     p.add_argument("--steps", type=int, default=100)
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--quiet", action="store_true", help="no progress line (there is none when stderr is not a terminal)")
     p.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "results", "python", "legged_throughput.csv"))
     args = p.parse_args()
     rows = []
+    # A progress line on a terminal (kestrel.progress): 2 robots x 2 thread counts x repeats x 2 loops.
+    progress = Progress(total=2 * 2 * args.repeats * 2 * args.steps * args.envs, unit="env-steps", desc="legged throughput",
+                        quiet=args.quiet)
     for gid in ("Kestrel-Go2-Flat-v0", "Kestrel-AnymalC-Flat-v0"):
         for threads in (1, 2):
             env = kestrel.make_vec(gid, num_envs=args.envs, seed=0, threads=threads)
@@ -42,16 +47,20 @@ def main():
                 for k in range(args.steps):
                     env.step(acts[k % 8])
                 best_py = min(best_py, time.perf_counter() - t0)
+                progress.update(args.steps * args.envs)  # outside the timed regions
                 t0 = time.perf_counter()
                 env.task.step_n(acts[0], args.steps)
                 best_cpp = min(best_cpp, time.perf_counter() - t0)
+                progress.update(args.steps * args.envs)
             n = args.envs * args.steps
             rows.append({"task": gid, "envs": args.envs, "threads": threads,
                          "python_policy_steps_per_s": round(n / best_py), "cpp_policy_steps_per_s": round(n / best_cpp),
                          "physics_steps_per_policy_step": 4, "cpu": platform.processor() or platform.machine(),
                          "cores": os.cpu_count(), "goal_2_cores": 150_000 if "Go2" in gid else ""})
-            print(rows[-1])
+            progress.clear()
+            print(rows[-1], flush=True)
             env.close()
+    progress.close()
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     with open(args.out, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))

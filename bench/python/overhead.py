@@ -17,6 +17,7 @@ import time
 import numpy as np
 
 import kestrel
+from kestrel.progress import Progress
 
 
 def best_of(fn, repeats):
@@ -35,6 +36,7 @@ def main():
     p.add_argument("--steps", type=int, default=300)
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--calls", type=int, default=100_000)
+    p.add_argument("--quiet", action="store_true", help="no progress line (there is none when stderr is not a terminal)")
     p.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "results", "python", "overhead.csv"))
     args = p.parse_args()
     rows = []
@@ -53,11 +55,17 @@ def main():
     def cpp_loop():
         env.task.step_n(a, args.steps)
 
+    # A progress line on a terminal (kestrel.progress), in steps of the whole bench: the throughput
+    # loops, then the three per-call loops at 1 env; updated between timed regions only.
+    progress = Progress(total=2 * args.repeats * args.steps * args.envs + 3 * args.repeats * args.calls, unit="env-steps",
+                        desc="overhead bench", quiet=args.quiet)
     # Interleaved, best of N each: the machine is shared, the best run is the least disturbed one.
     t_py, t_cpp = float("inf"), float("inf")
     for _ in range(args.repeats):
         t_py = min(t_py, best_of(py_loop, 1))
+        progress.update(args.steps * args.envs)
         t_cpp = min(t_cpp, best_of(cpp_loop, 1))
+        progress.update(args.steps * args.envs)
     sps_py, sps_cpp = args.envs * args.steps / t_py, args.envs * args.steps / t_cpp
     rows.append({"measure": f"env-steps/s, {args.envs} envs, {args.threads} threads, Python KestrelVectorEnv.step", "value": round(sps_py)})
     rows.append({"measure": f"env-steps/s, {args.envs} envs, {args.threads} threads, C++ Task.step_n (same task and actions)", "value": round(sps_cpp)})
@@ -81,9 +89,15 @@ def main():
     def cpp_calls():
         task.step_n(a1, n)
 
-    t_task = best_of(task_calls, args.repeats) / n
-    t_env = best_of(env_calls, args.repeats) / n
-    t_c = best_of(cpp_calls, args.repeats) / n
+    def timed(fn):
+        t = best_of(fn, args.repeats) / n
+        progress.update(args.repeats * n)
+        return t
+
+    t_task = timed(task_calls)
+    t_env = timed(env_calls)
+    t_c = timed(cpp_calls)
+    progress.close()
     rows.append({"measure": "us per step, 1 env, C++ step only (Task.step_n)", "value": round(t_c * 1e6, 3)})
     rows.append({"measure": "us per step call, 1 env, kestrel.Task.step (binding)", "value": round(t_task * 1e6, 3)})
     rows.append({"measure": "us per step call, 1 env, KestrelVectorEnv.step (gymnasium API)", "value": round(t_env * 1e6, 3)})

@@ -45,8 +45,19 @@ pin="taskset -c ${PIN:-0,1}"
 command -v taskset >/dev/null || pin=""
 echo "side,pair,case,envs,threads,env_steps_per_s,ns_per_env_step,note" > "$out/harness.csv"
 echo "side,pair,task,controller,backend,envs,threads,ns_per_env_step" > "$out/task.csv"
+start=$(date +%s)
 for i in $(seq 1 "$pairs"); do
   for side in base now; do
+    # A progress line on a terminal (issue 15): runs done of 2 x pairs, elapsed, time left at the
+    # mean pace so far; nothing when stderr is a file or a pipe, or with QUIET=1.
+    if [ -t 2 ] && [ "${QUIET:-0}" != 1 ]; then
+      done_runs=$(( (i - 1) * 2 + $([ "$side" = base ] && echo 0 || echo 1) ))
+      el=$(( $(date +%s) - start ))
+      left="?"
+      [ "$done_runs" -gt 0 ] && left=$(( el * (2 * pairs - done_runs) / done_runs ))
+      printf '\r  side by side: run %d of %d (pair %d, %s), %d s elapsed, %s s left\033[K' \
+        "$((done_runs + 1))" "$((2 * pairs))" "$i" "$side" "$el" "$left" >&2
+    fi
     dir=$([ "$side" = base ] && echo "$base_dir" || echo "$now_dir")
     $pin "$dir/kestrel_bench_sim" --quick --reps 7 --csv "$out/r.csv" >/dev/null
     tail -n +2 "$out/r.csv" | sed "s/^/$side,$i,/" >> "$out/harness.csv"
@@ -54,4 +65,5 @@ for i in $(seq 1 "$pairs"); do
     $pin "$dir/kestrel_bench_task" --reps 2 $only | grep -E '^[a-z_]+,' | grep -v '^task,' | sed "s/^/$side,$i,/" >> "$out/task.csv"
   done
 done
+if [ -t 2 ] && [ "${QUIET:-0}" != 1 ]; then printf '\r  side by side: %d runs in %d s\033[K\n' "$((2 * pairs))" "$(( $(date +%s) - start ))" >&2; fi
 python3 bench/sim/side_by_side_summary.py "$out"

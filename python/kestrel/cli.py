@@ -8,7 +8,9 @@
 `kestrel run SCENARIO` and the other scenario commands are the C++ CLI (build/host/sim/kestrel),
 which this command does not replace: any other command is handed to that program (KESTREL_CLI, or
 build/host/sim/kestrel under the current directory) when it exists; otherwise the command says so
-and exits with status 2.
+and exits with status 2. `run` goes to it as a child process, and then this command draws the run's
+figures from the CSVs it wrote (kestrel.plots: the C++ program cannot import matplotlib); `--no-plot`
+skips that. `kestrel plot DIR` draws them for any earlier run.
 """
 from __future__ import annotations
 
@@ -20,6 +22,8 @@ _COMMANDS = {
     "export": "export a trained actor to a C++ header (firmware) and/or ONNX",
     "view": "the 3-D viewer in a browser page (viser): a live run, or --replay FILE with a time slider",
     "teleop": "the viewer with robot 0 of env 0 driven from the page's keyboard and mouse",
+    "plot": "draw a run's figures (trajectory.png, curves.png) from its CSVs with matplotlib",
+    "run": "the C++ harness's `kestrel run`, then its trajectory plot (--no-plot: without; --record FILE / --view: through the bindings)",
 }
 
 
@@ -53,12 +57,46 @@ def main(argv: list[str] | None = None) -> int:
         from .record import run_main
 
         return run_main(rest)
+    if cmd == "plot":
+        from .plots import main as plot_main
+
+        return plot_main(rest, prog="kestrel plot")
     cxx = os.environ.get("KESTREL_CLI") or os.path.join("build", "host", "sim", "kestrel")
     if os.path.isfile(cxx) and os.access(cxx, os.X_OK):
-        os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel run / list / ...
+        if cmd == "run":
+            return _run_and_plot(cxx, rest)
+        os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel list / schema / ...
     print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export)\n\n{_usage()}",
           file=sys.stderr)
     return 2
+
+
+def _run_and_plot(cxx: str, args: list[str]) -> int:
+    """`kestrel run ARGS`: the C++ harness as a child (its stdout, stderr and terminal are this
+    process's: the progress line still sees a terminal), then trajectory.png from the CSVs it wrote
+    to --out (default kestrel_out, the C++ program's default). Its exit status, or 1 if plotting failed."""
+    import subprocess
+
+    plot = "--no-plot" not in args
+    args = [a for a in args if a != "--no-plot"]
+    out_dir = "kestrel_out"
+    for i, a in enumerate(args[:-1]):
+        if a == "--out":
+            out_dir = args[i + 1]  # the last --out wins, as in the C++ parser
+    # KESTREL_PLOT_BY_CALLER: the C++ program leaves out its "plot: kestrel plot DIR" hint.
+    rc = subprocess.call([cxx, "run", *args], env={**os.environ, "KESTREL_PLOT_BY_CALLER": "1"})
+    if rc != 0 or not plot or any(a in ("-h", "--help") for a in args):
+        return rc
+    sys.stdout.flush()
+    try:
+        from .plots import plot_trajectory
+
+        print(f"  wrote {plot_trajectory(out_dir)}")
+    except Exception as ex:  # the run itself succeeded: say what is missing, keep its CSVs
+        print(f"kestrel run: the run's CSVs are in {out_dir}, but its plot failed: {type(ex).__name__}: {ex}\n"
+              f"  (retry with `kestrel plot {out_dir}`)", file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":

@@ -31,6 +31,7 @@ import argparse
 import csv
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass, asdict
 from typing import Callable
@@ -318,36 +319,20 @@ class Learner:
             self.venv.save(path + ".vecnormalize.pkl")
 
 
-def plot(rows: list[dict], path: str, title: str) -> None:
-    import matplotlib
+def plot(rows: list[dict], path: str, title: str, target_success: float | None = None) -> None:
+    """The learning curves (kestrel.plots.plot_learning_curves: labelled axes with units, legends,
+    the --target-success line)."""
+    from .plots import plot_learning_curves
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plot_learning_curves(rows, path, title, target_success)
 
-    x = [r["env_steps"] for r in rows]
-    tracking = any(np.isfinite(r.get("lin_vel_error_m_s", float("nan"))) for r in rows)
-    fig, ax = plt.subplots(1, 4 if tracking else 3, figsize=(17 if tracking else 13, 3.6))
-    ax[0].plot(x, [r["mean_return"] for r in rows], marker="o")
-    ax[0].set_title("evaluation return")
-    ax[1].plot(x, [100 * r["success_rate"] for r in rows], marker="o", label="success")
-    ax[1].plot(x, [100 * r["crash_rate"] for r in rows], marker="x", label="crash")
-    ax[1].set_title("success / crash rate (%)")
-    ax[1].legend()
-    ax[2].plot(x, [r["mean_length"] for r in rows], marker="o")
-    ax[2].set_title("episode length (env-steps)")
-    if tracking:
-        ax[3].plot(x, [r["lin_vel_error_m_s"] for r in rows], marker="o", label="|cmd_xy - v_xy| (m/s)")
-        ax[3].plot(x, [r["yaw_rate_error_rad_s"] for r in rows], marker="x", label="|cmd_yaw - w_z| (rad/s)")
-        ax[3].axhline(0.1, color="gray", ls="--", lw=1, label="goal 0.1 m/s")
-        ax[3].set_title("velocity tracking error")
-        ax[3].legend(fontsize=8)
-    for a in ax:
-        a.set_xlabel("env-steps")
-        a.grid(alpha=0.3)
-    fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+
+def progress_enabled(quiet: bool, stream=None) -> bool:
+    """The progress bar (issue 15): on a terminal only, never with --quiet (a log file or a pipe
+    gets no carriage-return lines)."""
+    stream = sys.stderr if stream is None else stream
+    isatty = getattr(stream, "isatty", None)
+    return not quiet and callable(isatty) and bool(isatty())
 
 
 # Hover thrust per motor of base_quadrotor: 0.25 kg x 9.81 m/s^2 / 4 (the thrust the World resets
@@ -582,7 +567,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     log_w = None
     from tqdm import tqdm
 
-    bar = tqdm(total=args.steps, unit="step", unit_scale=True, disable=args.quiet, desc=f"{args.learner} {args.task}")
+    bar = tqdm(total=args.steps, unit="env-step", unit_scale=True, disable=not progress_enabled(args.quiet),
+               desc=f"{args.learner} {args.task}")
     prev_infos = env.task.infos
 
     def on_update(n: int, scalars: dict) -> None:
@@ -658,7 +644,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     if writer is not None:
         writer.close()
     plot(rows, os.path.join(args.out, "curves.png"),
-         f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}")
+         f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}", args.target_success)
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
                "seed": args.seed, "action_scale": scale, "action_offset": offset,
                "action_repeat": args.action_repeat, "shaping": args.shaping, "obs_norm": args.obs_norm, "squash": args.squash,

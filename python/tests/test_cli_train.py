@@ -42,8 +42,10 @@ def test_kestrel_train_writes_tensorboard_csv_plot_checkpoints_and_onnx(tmp_path
                                    "--eval-every", "2560", "--eval-episodes", "16", "--episode-len", "100",
                                    "--threads", "1", "--out", str(out)])
     assert rc == 0
-    err = capfd.readouterr().err
-    assert "5.12k/5.12k" in err  # the progress bar reached the end
+    cap = capfd.readouterr()
+    # stderr is a file here, not a terminal: no progress bar (issue 15), but the summary on stdout.
+    assert "env-step" not in cap.err and "5.12k/5.12k" not in cap.err, cap.err
+    assert '"env_steps": 5120' in cap.out
 
     with open(out / "log.csv") as f:
         rows = list(csv.DictReader(f))
@@ -75,3 +77,54 @@ def test_kestrel_train_writes_tensorboard_csv_plot_checkpoints_and_onnx(tmp_path
     onnx.checker.check_model(onnx.load(ex["onnx"]))
     # Trained without a normaliser, squashed into [-1, 1]: exported without either part (export.py).
     assert "MlpParams<13, 64, 64, 4, 0u>" in (out / "policy.hpp").read_text()
+
+
+def test_progress_bar_only_on_a_terminal_and_not_quiet():
+    from kestrel.train import progress_enabled
+
+    class Stream:
+        def __init__(self, tty):
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+    assert progress_enabled(False, Stream(True)) is True
+    assert progress_enabled(True, Stream(True)) is False  # --quiet
+    assert progress_enabled(False, Stream(False)) is False  # a file or a pipe
+    assert progress_enabled(False, object()) is False  # no isatty at all
+
+
+def test_training_progress_bar_on_a_pseudo_terminal(tmp_path):
+    """With stderr on a pseudo-terminal the bar is drawn and reaches the end; --quiet silences it."""
+    import fcntl
+    import pty
+    import struct
+    import termios
+
+    exe = os.path.join(os.path.dirname(sys.executable), "kestrel")
+    base = [exe, "train", TASK, "--learner", "rsl_rl", "--envs", "16", "--seed", "0", "--steps", "2560", "--eval-every", "2560",
+            "--eval-episodes", "16", "--episode-len", "100", "--threads", "1", "--tensorboard", "0", "--export", "0"]
+    for quiet in (False, True):
+        master, slave = pty.openpty()
+        # A terminal 120 columns wide (a fresh pseudo-terminal has 0, where tqdm draws an empty bar).
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
+        cmd = base + ["--out", str(tmp_path / f"q{int(quiet)}")] + (["--quiet"] if quiet else [])
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=slave, close_fds=True)
+        os.close(slave)
+        chunks = []
+        while True:
+            try:
+                b = os.read(master, 4096)
+            except OSError:  # EIO: the child closed the terminal
+                break
+            if not b:
+                break
+            chunks.append(b)
+        os.close(master)
+        assert p.wait(timeout=300) == 0
+        err = b"".join(chunks).decode(errors="replace")
+        if quiet:
+            assert "env-step" not in err, err
+        else:
+            assert "2.56k/2.56k" in err and "env-step" in err, err

@@ -2,8 +2,12 @@
 //   kestrel run [SCENARIO] --envs N --steps S --threads T --seed X --out DIR [--image-env E] [--max-memory-gib G]
 //   Every run (scenario, --task, either backend) writes to DIR (default kestrel_out): summary.txt
 //   (the printed summary) and trajectory.csv (the first 6 environments' robot 0 per env-step); on
-//   the rigid simulator also envs.csv (per-environment final state and counters), trajectory.png
-//   (top view) and, with sensors in the scenario, env E's sensor images: sensor_<name>_*.png.
+//   the rigid simulator also envs.csv (per-environment final state, counters and bounds),
+//   obstacles.csv (the traced environments' last obstacle layouts) and, with sensors in the
+//   scenario, env E's sensor images: sensor_<name>_*.png (libpng). The plots are matplotlib's,
+//   drawn from these CSVs by the Python package (`kestrel run` through the console script, or
+//   `kestrel plot DIR`: python/kestrel/plots.py); this program cannot import matplotlib.
+//   On a terminal, a progress line on stderr (env-steps, rate, time left) unless --quiet.
 //   kestrel list
 // With no scenario, `run` uses the embedded default (1024 quadrotors, position setpoints, forest).
 #include <sys/stat.h>
@@ -45,7 +49,9 @@ int usage() {
                "usage: kestrel run [SCENARIO.yaml] [--envs N] [--steps S] [--threads T] [--seed X] [--out DIR] [--image-env E] [--quiet]\n"
                "                   [--task ID] [--policy scripted|zero] [--max-memory-gib G]\n"
                "         --out DIR (default kestrel_out), every run: summary.txt, trajectory.csv; rigid simulator also\n"
-               "                   envs.csv, trajectory.png and env E's sensor images (sensor_<name>_*.png)\n"
+               "                   envs.csv, obstacles.csv and env E's sensor images (sensor_<name>_*.png); plots:\n"
+               "                   `kestrel plot DIR` (the Python package; its `kestrel run` plots by itself)\n"
+               "         --quiet   no progress line (it is shown only when stderr is a terminal)\n"
                "       kestrel list\n"
                "       kestrel schema      (the scenario reference: every key, unit, range and default)\n");
   return 2;
@@ -70,7 +76,7 @@ bool parse_long(const char* s, long long lo, long long hi, long long& out) {
 // zero actions; the summary reports the episodes, their terminations, the success rate, the mean
 // episode reward and the reward trend (mean step reward over the first and the last quarter).
 int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, long long steps, bool scripted,
-             const std::string& out_dir, long long image_env) {
+             const std::string& out_dir, long long image_env, bool quiet) {
   std::string err;
   std::unique_ptr<Task> task = make_task(cfg, backend, err);
   if (!task) {
@@ -102,6 +108,7 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
     rep.say("  robot flown: %s\n", describe_robot(cfg).c_str());  // mass, inertia, rotors, max thrust, T/W
   double reward_sum = 0, first_quarter = 0, last_quarter = 0;
   const long long quarter = std::max(1LL, steps / 4);
+  ProgressLine progress(stderr, !quiet && ProgressLine::stderr_is_terminal(), static_cast<double>(steps) * n);
   const auto t0 = std::chrono::steady_clock::now();
   for (long long s = 0; s < steps; ++s) {
     if (scripted) (void)task->scripted_actions(actions.data());
@@ -116,7 +123,9 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
       real* t = &trace[(static_cast<std::size_t>(e) * static_cast<std::size_t>(steps) + static_cast<std::size_t>(s)) * 3];
       for (int k = 0; k < 3; ++k) t[k] = sim.base_pos_w()[3 * i + static_cast<std::size_t>(k)];
     }
+    progress.update(static_cast<double>(s + 1) * n);
   }
+  progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const TaskInfos& in = task->infos();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(steps) * n / secs);  // not in summary.txt: varies
@@ -144,12 +153,12 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
   const std::string tpath = out_dir + "/trajectory.csv";
   if (world != nullptr) {
     if (!write_trajectory_csv(*world, tpath, err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
-        !write_trajectory_png(*world, out_dir + "/trajectory.png", err) ||
+        !write_obstacles_csv(*world, world->trace_envs(), out_dir + "/obstacles.csv", err) ||
         (world->num_sensors() > 0 && !write_sensor_pngs(*world, static_cast<int>(std::min<long long>(image_env, n - 1)), out_dir, wrote, err))) {
       std::fprintf(stderr, "kestrel: %s\n", err.c_str());
       return 1;
     }
-    wrote.insert(wrote.begin(), {tpath, out_dir + "/envs.csv", out_dir + "/trajectory.png"});
+    wrote.insert(wrote.begin(), {tpath, out_dir + "/envs.csv", out_dir + "/obstacles.csv"});
   } else {
     if (!write_trace_csv(tpath, "x_m,y_m,z_m", trace.data(), trace_envs, steps, err)) {
       std::fprintf(stderr, "kestrel: %s\n", err.c_str());
@@ -158,6 +167,7 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
     wrote.insert(wrote.begin(), tpath);
   }
   for (const std::string& p : wrote) std::printf("  wrote %s\n", p.c_str());
+  print_plot_hint(out_dir);
   if (!rep.finish(out_dir, task->state_hash(), err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
@@ -278,22 +288,20 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   }
   rep.say("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
-  // Progress bar on long runs (stderr, so the summary on stdout stays clean to compare).
-  const bool bar = !r.quiet && static_cast<double>(r.steps) * world->num_envs() >= 2e6;
-  const long long chunk = std::max(1LL, r.steps / 50);
+  // Progress line on a terminal (stderr, so the summary on stdout stays clean to compare). The
+  // steps go in chunks of about 64k env-steps, so the line moves a few times a second even on
+  // large worlds; chunking does not change the result (a step is the same however it is batched).
+  const double total = static_cast<double>(r.steps) * world->num_envs();
+  ProgressLine progress(stderr, !r.quiet && ProgressLine::stderr_is_terminal(), total);
+  const long long chunk = std::max(1LL, std::min(r.steps, 65536LL / world->num_envs()));
   const auto t0 = std::chrono::steady_clock::now();
   for (long long done = 0; done < r.steps;) {
     const long long n = std::min(chunk, r.steps - done);
     world->step(static_cast<int>(n));
     done += n;
-    if (bar) {
-      const int filled = static_cast<int>(40 * done / r.steps);
-      std::fprintf(stderr, "\r  [%.*s%*s] %3lld%%", filled, "########################################", 40 - filled, "",
-                   100 * done / r.steps);
-      std::fflush(stderr);
-    }
+    progress.update(static_cast<double>(done) * world->num_envs());
   }
-  if (bar) std::fprintf(stderr, "\n");
+  progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = world->summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
@@ -309,11 +317,11 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   const std::string& out_dir = r.out_dir;
   ::mkdir(out_dir.c_str(), 0755);
   if (!write_trajectory_csv(*world, out_dir + "/trajectory.csv", err) || !write_env_csv(*world, out_dir + "/envs.csv", err) ||
-      !write_trajectory_png(*world, out_dir + "/trajectory.png", err)) {
+      !write_obstacles_csv(*world, world->trace_envs(), out_dir + "/obstacles.csv", err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
   }
-  std::printf("  wrote %s/trajectory.csv, %s/envs.csv, %s/trajectory.png\n", out_dir.c_str(), out_dir.c_str(), out_dir.c_str());
+  std::printf("  wrote %s/trajectory.csv, %s/envs.csv, %s/obstacles.csv\n", out_dir.c_str(), out_dir.c_str(), out_dir.c_str());
   if (world->num_sensors() > 0) {
     std::vector<std::string> images;
     if (!write_sensor_pngs(*world, static_cast<int>(r.image_env), out_dir, images, err)) {
@@ -322,6 +330,7 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
     }
     for (const std::string& p : images) std::printf("  wrote %s (env %lld)\n", p.c_str(), r.image_env);
   }
+  print_plot_hint(out_dir);
   if (!rep.finish(out_dir, world->state_hash(), err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;
@@ -345,7 +354,7 @@ int run(int argc, char** argv) {
   }
   if (cfg.robot.kind == robots::RobotKind::articulated) {
     // Legged robots and arms (sim/src/backends/articulated.cpp): random joint targets (run_scripted).
-    if (cfg.task.name == "locomotion_task") return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
+    if (cfg.task.name == "locomotion_task") return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env, r.quiet);
     if (is_rl_task(cfg.task.name)) {
       std::fprintf(stderr, "kestrel: %s: task %s: drives multirotors; an articulated robot (%s) runs locomotion_task, or `kestrel run` with no task\n",
                    label.c_str(), cfg.task.name.c_str(), cfg.robot.name.c_str());
@@ -359,7 +368,7 @@ int run(int argc, char** argv) {
     return run_scripted(*sim, label, r.steps, r.out_dir, r.quiet);
   }
   if (backend == Backend::planar) {
-    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
+    if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env, r.quiet);
     std::unique_ptr<Simulator> sim = make_simulator(cfg, backend, err);
     if (!sim) {
       std::fprintf(stderr, "kestrel: %s: %s\n", label.c_str(), err.c_str());
@@ -372,7 +381,7 @@ int run(int argc, char** argv) {
                  label.c_str());
     return 1;
   }
-  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env);
+  if (is_rl_task(cfg.task.name)) return run_task(cfg, backend, label, r.steps, r.scripted, r.out_dir, r.image_env, r.quiet);
   return run_world(cfg, r, label);
 }
 

@@ -224,7 +224,12 @@ void env_step_end(const WorldModel& m, WorldData& d, int env) {
   ++es.env_steps;
   if (env < d.trace_envs) {
     const std::uint64_t k = es.env_steps - 1 - d.trace_base;
-    if (k < static_cast<std::uint64_t>(d.trace_cap)) d.trace[static_cast<std::size_t>(env) * d.trace_cap + k] = d.state[m.index(env, 0)].position_w;
+    if (k < static_cast<std::uint64_t>(d.trace_cap)) {
+      const std::size_t t = static_cast<std::size_t>(env) * static_cast<std::size_t>(d.trace_cap) + static_cast<std::size_t>(k);
+      d.trace[t] = d.state[m.index(env, 0)].position_w;
+      d.trace_target[t] = d.target_w[m.index(env, 0)];  // before this step's reset: the episode's own target
+      d.trace_episode[t] = es.resets;
+    }
   }
   bool any_crash = false, out = false;
   real err_sum = 0;

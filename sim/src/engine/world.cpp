@@ -79,7 +79,10 @@ void World::enable_trace(int num_envs, int max_env_steps) {
   d.trace_cap = max_env_steps;
   d.trace_len = 0;
   d.trace_base = model_.num_envs > 0 ? d.stats[0].env_steps : 0;
-  d.trace.assign(static_cast<std::size_t>(d.trace_envs) * d.trace_cap, Vec3::Zero());
+  const std::size_t n = static_cast<std::size_t>(d.trace_envs) * static_cast<std::size_t>(d.trace_cap);
+  d.trace.assign(n, Vec3::Zero());
+  d.trace_target.assign(n, Vec3::Zero());
+  d.trace_episode.assign(n, 0);
 }
 
 WorldSummary World::summary() const {

@@ -1,12 +1,14 @@
 #include "kestrel/sim/output.hpp"
 
 #include <png.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
 #include <vector>
 
 namespace kestrel::sim {
@@ -17,13 +19,19 @@ bool write_trajectory_csv(const World& w, const std::string& path, std::string& 
     error = path + ": cannot write";
     return false;
   }
-  std::fprintf(f, "env,step,x_m,y_m,z_m\n");
+  std::fprintf(f, "env,step,x_m,y_m,z_m,target_x_m,target_y_m,target_z_m,episode\n");
   for (int e = 0; e < w.trace_envs(); ++e)
     for (int k = 0; k < w.trace_length(); ++k) {
       const Vec3& p = w.trace_point(e, k);
-      std::fprintf(f, "%d,%d,%.6g,%.6g,%.6g\n", e, k + 1, static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+      const Vec3& t = w.trace_target(e, k);
+      std::fprintf(f, "%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%u\n", e, k + 1, static_cast<double>(p[0]), static_cast<double>(p[1]),
+                   static_cast<double>(p[2]), static_cast<double>(t[0]), static_cast<double>(t[1]), static_cast<double>(t[2]),
+                   static_cast<unsigned>(w.trace_episode(e, k)));
     }
-  std::fclose(f);
+  if (std::fclose(f) != 0) {
+    error = path + ": cannot write";
+    return false;
+  }
   return true;
 }
 
@@ -33,81 +41,153 @@ bool write_env_csv(const World& w, const std::string& path, std::string& error) 
     error = path + ": cannot write";
     return false;
   }
-  std::fprintf(f, "env,robot,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,target_x_m,target_y_m,target_z_m,env_steps,crashes,resets,timeouts,out_of_bounds,successes\n");
+  std::fprintf(f, "env,robot,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,target_x_m,target_y_m,target_z_m,env_steps,crashes,resets,timeouts,out_of_bounds,successes,"
+                  "lower_x_m,lower_y_m,lower_z_m,upper_x_m,upper_y_m,upper_z_m\n");
   for (int e = 0; e < w.num_envs(); ++e)
     for (int r = 0; r < w.robots_per_env(); ++r) {
       const RigidBodyState& s = w.robot_state(e, r);
       const Vec3& t = w.target(e, r);
       const EnvStats& st = w.stats(e);
-      std::fprintf(f, "%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%llu,%u,%u,%u,%u,%u\n", e, r,
+      Vec3 lo, hi;
+      w.lower_upper_bounds(e, lo, hi);
+      std::fprintf(f, "%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%llu,%u,%u,%u,%u,%u,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", e, r,
                    static_cast<double>(s.position_w[0]), static_cast<double>(s.position_w[1]), static_cast<double>(s.position_w[2]),
                    static_cast<double>(s.linvel_w[0]), static_cast<double>(s.linvel_w[1]), static_cast<double>(s.linvel_w[2]),
                    static_cast<double>(t[0]), static_cast<double>(t[1]), static_cast<double>(t[2]),
-                   static_cast<unsigned long long>(st.env_steps), st.crashes, st.resets, st.timeouts, st.out_of_bounds, st.successes);
+                   static_cast<unsigned long long>(st.env_steps), st.crashes, st.resets, st.timeouts, st.out_of_bounds, st.successes,
+                   static_cast<double>(lo[0]), static_cast<double>(lo[1]), static_cast<double>(lo[2]), static_cast<double>(hi[0]),
+                   static_cast<double>(hi[1]), static_cast<double>(hi[2]));
     }
-  std::fclose(f);
+  if (std::fclose(f) != 0) {
+    error = path + ": cannot write";
+    return false;
+  }
   return true;
 }
 
 namespace {
-/// Liang-Barsky: clips the segment to [xmin, xmax] x [ymin, ymax] in place. False: nothing of it
-/// is inside (or a coordinate is not finite). An endpoint inside the box is left exactly as given.
-/// A moved endpoint lies on the edge that clipped it (set exactly: with endpoints ~1e40 px away,
-/// x0 + t dx has an absolute rounding error far above a pixel) and is clamped into the box.
-bool clip_segment(double& x0, double& y0, double& x1, double& y1, double xmin, double xmax, double ymin, double ymax) {
-  if (!std::isfinite(x0) || !std::isfinite(y0) || !std::isfinite(x1) || !std::isfinite(y1)) return false;
-  const double dx = x1 - x0, dy = y1 - y0;
-  if (!std::isfinite(dx) || !std::isfinite(dy)) return false;
-  double t0 = 0, t1 = 1;
-  int e0 = -1, e1 = -1;  // the edge (0 xmin, 1 xmax, 2 ymin, 3 ymax) that set t0 / t1
-  auto edge = [&](int id, double p, double q) {  // keeps the part with p t <= q
-    if (p == 0) return q >= 0;
-    const double r = q / p;
-    if (p < 0) {
-      if (r > t1) return false;
-      if (r > t0) t0 = r, e0 = id;
-    } else {
-      if (r < t0) return false;
-      if (r < t1) t1 = r, e1 = id;
-    }
-    return true;
-  };
-  if (!edge(0, -dx, x0 - xmin) || !edge(1, dx, xmax - x0) || !edge(2, -dy, y0 - ymin) || !edge(3, dy, ymax - y0)) return false;
-  const double ox = x0, oy = y0;
-  const double edges[4] = {xmin, xmax, ymin, ymax};
-  auto place = [&](int id, double t, double& x, double& y) {
-    x = std::min(xmax, std::max(xmin, ox + t * dx));
-    y = std::min(ymax, std::max(ymin, oy + t * dy));
-    (id < 2 ? x : y) = edges[id];
-  };
-  if (e1 >= 0) place(e1, t1, x1, y1);
-  if (e0 >= 0) place(e0, t0, x0, y0);
-  return true;
+const char* asset_kind_name(AssetKind k) {
+  switch (k) {
+    case AssetKind::tree: return "tree";
+    case AssetKind::panel: return "panel";
+    case AssetKind::cube: return "cube";
+    case AssetKind::rod: return "rod";
+    case AssetKind::small_wall: return "small_wall";
+    case AssetKind::wall: return "wall";
+    case AssetKind::thin: return "thin";
+    case AssetKind::sphere: return "sphere";
+    case AssetKind::mesh: return "mesh";
+  }
+  return "unknown";
+}
+const char* shape_type_name(ShapeType t) {
+  switch (t) {
+    case ShapeType::sphere: return "sphere";
+    case ShapeType::box: return "box";
+    case ShapeType::capsule: return "capsule";
+    case ShapeType::cylinder: return "cylinder";
+    case ShapeType::convex_hull: return "convex_hull";
+  }
+  return "unknown";
 }
 }  // namespace
 
-std::size_t draw_line_rgb(unsigned char* rgb, int W, int H, double x0, double y0, double x1, double y1, const unsigned char c[3]) {
-  // Clipped in floating point to a 2-pixel border around the canvas before anything becomes an
-  // int (fuzz F2: obstacles ~1e9 m away gave pixel coordinates beyond int, overflow in the
-  // Bresenham error terms and a crash). What is drawn inside the canvas is unchanged: segments
-  // within the border are not touched, and the rest of a long one lies off the canvas.
-  if (!clip_segment(x0, y0, x1, y1, -2.0, W + 1.0, -2.0, H + 1.0)) return 0;
-  int ix0 = static_cast<int>(std::lround(x0)), iy0 = static_cast<int>(std::lround(y0));
-  const int ix1 = static_cast<int>(std::lround(x1)), iy1 = static_cast<int>(std::lround(y1));
-  const int dx = std::abs(ix1 - ix0), sx = ix0 < ix1 ? 1 : -1, dy = -std::abs(iy1 - iy0), sy = iy0 < iy1 ? 1 : -1;
-  int err = dx + dy;
-  std::size_t drawn = 0;
-  for (;;) {
-    if (ix0 >= 0 && iy0 >= 0 && ix0 < W && iy0 < H) {
-      for (int k = 0; k < 3; ++k) rgb[(static_cast<std::size_t>(iy0) * static_cast<std::size_t>(W) + static_cast<std::size_t>(ix0)) * 3 + k] = c[k];
-      ++drawn;
-    }
-    if (ix0 == ix1 && iy0 == iy1) break;
-    const int e2 = 2 * err;
-    if (e2 >= dy) { err += dy; ix0 += sx; }
-    if (e2 <= dx) { err += dx; iy0 += sy; }
+bool write_obstacles_csv(const World& w, int envs, const std::string& path, std::string& error) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    error = path + ": cannot write";
+    return false;
   }
-  return drawn;
+  // The shape's own parameters (pose as a unit quaternion, radius / half length along the local z
+  // axis / box half extents) and its world bounding box: a plot draws the exact footprint of a
+  // sphere, box, capsule or cylinder and falls back to the box for a convex hull (mesh).
+  std::fprintf(f, "env,index,kind,shape,semantic_id,upright,x_m,y_m,z_m,qw,qx,qy,qz,radius_m,half_length_m,"
+                  "half_x_m,half_y_m,half_z_m,aabb_min_x_m,aabb_min_y_m,aabb_min_z_m,aabb_max_x_m,aabb_max_y_m,aabb_max_z_m\n");
+  for (int e = 0; e < std::min(envs, w.num_envs()); ++e)
+    for (int i = 0; i < w.num_obstacles(e); ++i) {
+      const Obstacle& o = w.obstacle(e, i);
+      const Shape& sh = o.shape;
+      const Quat& q = sh.orientation_wb;
+      auto d = [](real v) { return static_cast<double>(v); };
+      std::fprintf(f, "%d,%d,%s,%s,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
+                   e, i, asset_kind_name(o.kind), shape_type_name(sh.type), static_cast<int>(o.semantic_id), o.upright ? 1 : 0,
+                   d(sh.position_w[0]), d(sh.position_w[1]), d(sh.position_w[2]), d(q.w()), d(q.x()), d(q.y()), d(q.z()),
+                   d(sh.radius_m), d(sh.half_length_m), d(sh.half_extents_m[0]), d(sh.half_extents_m[1]), d(sh.half_extents_m[2]),
+                   d(o.aabb_min_w[0]), d(o.aabb_min_w[1]), d(o.aabb_min_w[2]), d(o.aabb_max_w[0]), d(o.aabb_max_w[1]),
+                   d(o.aabb_max_w[2]));
+    }
+  if (std::fclose(f) != 0) {
+    error = path + ": cannot write";
+    return false;
+  }
+  return true;
+}
+
+void print_plot_hint(const std::string& out_dir) {
+  const char* by_caller = std::getenv("KESTREL_PLOT_BY_CALLER");
+  if (by_caller != nullptr && *by_caller != '\0') return;
+  std::printf("  plot: kestrel plot %s  (the Python package, .venv/bin/kestrel; or python -m kestrel.plots %s)\n", out_dir.c_str(),
+              out_dir.c_str());
+}
+
+ProgressLine::ProgressLine(std::FILE* out, bool enabled, double total_env_steps)
+    : out_(out), enabled_(enabled && out != nullptr && total_env_steps > 0), total_(total_env_steps),
+      t0_(std::chrono::steady_clock::now()) {}
+
+bool ProgressLine::stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+namespace {
+// 1234567 -> "1.23M": the figures of a progress line, short enough to keep it on one line.
+std::string si(double v) {
+  char b[32];
+  if (v < 1e3) std::snprintf(b, sizeof b, "%.0f", v);
+  else if (v < 1e6) std::snprintf(b, sizeof b, "%.1fk", v / 1e3);
+  else if (v < 1e9) std::snprintf(b, sizeof b, "%.2fM", v / 1e6);
+  else std::snprintf(b, sizeof b, "%.2fG", v / 1e9);
+  return b;
+}
+}  // namespace
+
+std::string ProgressLine::format(double done, double total, double elapsed_s) {
+  const double rate = elapsed_s > 0 ? done / elapsed_s : 0;
+  char left[48] = "? s left";
+  if (rate > 0) {
+    const double s = (total - done) / rate;
+    if (s < 60) std::snprintf(left, sizeof left, "%.1f s left", s);
+    else if (s < 3600) std::snprintf(left, sizeof left, "%d min %02d s left", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+    else std::snprintf(left, sizeof left, "%d h %02d min left", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
+  }
+  char b[160];
+  std::snprintf(b, sizeof b, "  env-steps %s / %s (%.0f%%), %s env-steps/s, %s", si(done).c_str(), si(total).c_str(),
+                total > 0 ? 100.0 * done / total : 0.0, si(rate).c_str(), left);
+  return b;
+}
+
+void ProgressLine::update(double done) {
+  if (enabled_) update_at(done, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
+}
+
+void ProgressLine::update_at(double done, double elapsed_s) {
+  if (!enabled_) return;
+  last_done_ = done;
+  if (elapsed_s < kFirstAfterS || (last_print_s_ >= 0 && elapsed_s - last_print_s_ < kIntervalS)) return;
+  last_print_s_ = elapsed_s;
+  // \r + erase to the end of the line: a terminal only (the line is enabled only there).
+  std::fprintf(out_, "\r%s\033[K", format(done, total_, elapsed_s).c_str());
+  std::fflush(out_);
+  ++lines_;
+}
+
+void ProgressLine::finish() {
+  if (enabled_) finish_at(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
+}
+
+void ProgressLine::finish_at(double elapsed_s) {
+  if (!enabled_ || lines_ == 0) return;
+  std::fprintf(out_, "\r%s\033[K\n", format(last_done_, total_, elapsed_s).c_str());
+  std::fflush(out_);
+  ++lines_;
+  enabled_ = false;  // once
 }
 
 bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {
@@ -133,45 +213,6 @@ bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* r
   png_destroy_write_struct(&png, &info);
   std::fclose(f);
   return true;
-}
-
-bool write_trajectory_png(const World& world, const std::string& path, std::string& error) {
-  const int W = 640, H = 480, M = 20;
-  std::vector<unsigned char> rgb(static_cast<std::size_t>(W) * H * 3, 255);
-  Vec3 lo, hi;
-  world.lower_upper_bounds(0, lo, hi);
-  const double sx = (W - 2 * M) / static_cast<double>(hi[0] - lo[0]), sy = (H - 2 * M) / static_cast<double>(hi[1] - lo[1]);
-  const double s = std::min(sx, sy);
-  // Metres -> pixels, kept in double (a far coordinate must not be converted to int: draw_line_rgb
-  // clips first). Within +-1e9 pixels the value is rounded here as before (the same pixels).
-  auto snap = [](double v) { return std::fabs(v) <= 1e9 ? static_cast<double>(std::lround(v)) : v; };
-  auto px = [&](real x) { return M + snap(static_cast<double>(x - lo[0]) * s); };
-  auto py = [&](real y) { return H - M - snap(static_cast<double>(y - lo[1]) * s); };
-  auto line = [&](double x0, double y0, double x1, double y1, const unsigned char c[3]) {
-    (void)draw_line_rgb(rgb.data(), W, H, x0, y0, x1, y1, c);
-  };
-  const unsigned char grey[3] = {160, 160, 160}, black[3] = {0, 0, 0};
-  line(px(lo[0]), py(lo[1]), px(hi[0]), py(lo[1]), black);
-  line(px(hi[0]), py(lo[1]), px(hi[0]), py(hi[1]), black);
-  line(px(hi[0]), py(hi[1]), px(lo[0]), py(hi[1]), black);
-  line(px(lo[0]), py(hi[1]), px(lo[0]), py(lo[1]), black);
-  for (int i = 0; i < world.num_obstacles(0); ++i) {
-    const Obstacle& o = world.obstacle(0, i);
-    const double x0 = px(o.aabb_min_w[0]), x1 = px(o.aabb_max_w[0]), y0 = py(o.aabb_min_w[1]), y1 = py(o.aabb_max_w[1]);
-    line(x0, y0, x1, y0, grey);
-    line(x1, y0, x1, y1, grey);
-    line(x1, y1, x0, y1, grey);
-    line(x0, y1, x0, y0, grey);
-  }
-  const unsigned char palette[6][3] = {{220, 30, 30}, {30, 120, 220}, {30, 170, 60}, {200, 120, 0}, {140, 40, 180}, {0, 160, 160}};
-  for (int e = 0; e < world.trace_envs(); ++e)
-    for (int k = 1; k < world.trace_length(); ++k) {
-      const Vec3& a = world.trace_point(e, k - 1);
-      const Vec3& b = world.trace_point(e, k);
-      if ((a - b).norm() > 1) continue;  // a reset: do not draw the jump back to the start
-      line(px(a[0]), py(a[1]), px(b[0]), py(b[1]), palette[e % 6]);
-    }
-  return write_png_rgb(path, W, H, rgb.data(), error);
 }
 
 bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,

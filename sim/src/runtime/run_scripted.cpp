@@ -29,7 +29,7 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   // Trajectory of robot 0 of the first environments (x, y, yaw per env-step).
   const int trace_envs = std::min(6, sim.num_envs());
   std::vector<real> trace(static_cast<std::size_t>(trace_envs) * static_cast<std::size_t>(steps) * 3, 0);
-  const bool bar = !quiet && static_cast<double>(steps) * sim.num_envs() >= 2e6;
+  ProgressLine progress(stderr, !quiet && ProgressLine::stderr_is_terminal(), static_cast<double>(steps) * sim.num_envs());
   const auto t0 = std::chrono::steady_clock::now();
   // Articulated robots: random joint targets, uniform in [-1, 1] actions (x robot.action_scale
   // about the home pose), redrawn every 25 env-steps from each robot's own stream.
@@ -54,14 +54,9 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
       t[1] = sim.base_pos_w()[3 * i + 1];
       t[2] = sim.base_euler_xyz()[3 * i + 2];
     }
-    if (bar && (s + 1) % std::max(1LL, steps / 50) == 0) {
-      const int filled = static_cast<int>(40 * (s + 1) / steps);
-      std::fprintf(stderr, "\r  [%.*s%*s] %3lld%%", filled, "########################################", 40 - filled, "",
-                   100 * (s + 1) / steps);
-      std::fflush(stderr);
-    }
+    progress.update(static_cast<double>(s + 1) * sim.num_envs());
   }
-  if (bar) std::fprintf(stderr, "\n");
+  progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const WorldSummary s = sim.summary();
   std::printf("  wall time %.3f s, %.3g env-steps/s\n", secs, static_cast<double>(s.env_steps) / secs);
@@ -84,6 +79,7 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
     return 1;
   }
   std::printf("  wrote %s\n", path.c_str());
+  print_plot_hint(out_dir);
   if (!rep.finish(out_dir, sim.state_hash(), err)) {
     std::fprintf(stderr, "kestrel: %s\n", err.c_str());
     return 1;

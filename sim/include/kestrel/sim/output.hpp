@@ -1,8 +1,12 @@
-// Run outputs: CSV logs and a PNG trajectory plot (libpng, lines rasterised with Bresenham's
-// algorithm, J. E. Bresenham, IBM Systems Journal 4(1), 1965).
+// Run outputs: CSV logs (trajectory, per-environment state, obstacles) that the `kestrel` console
+// script plots with matplotlib (python/kestrel/plots.py, issue 15), sensor images as PNG (libpng:
+// the one image the C++ side still writes, with no Python in the loop), and the run's summary and
+// progress line.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -10,18 +14,15 @@
 
 namespace kestrel::sim {
 
-/// trajectory.csv: env, step, x, y, z of the traced environments.
+/// trajectory.csv: env, step, x, y, z of robot 0 of the traced environments, with the target and
+/// the episode number (resets before it) of every point.
 [[nodiscard]] bool write_trajectory_csv(const World& world, const std::string& path, std::string& error);
-/// envs.csv: one row per environment: final state, target, counters.
+/// envs.csv: one row per environment: final state, target, counters, the environment's bounds.
 [[nodiscard]] bool write_env_csv(const World& world, const std::string& path, std::string& error);
-/// trajectory.png: x-y paths (top view) of the traced environments over the env bounds, with
-/// the obstacles of environment 0 outlined by their AABBs.
-[[nodiscard]] bool write_trajectory_png(const World& world, const std::string& path, std::string& error);
-
-/// Rasterises the segment (x0, y0)-(x1, y1), in pixels, into a W x H RGB buffer (row-major, 3
-/// bytes per pixel) with colour c; returns the pixels written. Any coordinates are accepted: far
-/// ones (1e12 px) are clipped in floating point first, non-finite ones draw nothing.
-std::size_t draw_line_rgb(unsigned char* rgb, int W, int H, double x0, double y0, double x1, double y1, const unsigned char c[3]);
+/// obstacles.csv: the obstacles of the first `envs` environments as they stand at the end of the
+/// run (each environment's last layout): asset kind, shape, pose, sizes and bounding box, so a
+/// plot draws their footprints without the scenario.
+[[nodiscard]] bool write_obstacles_csv(const World& world, int envs, const std::string& path, std::string& error);
 
 /// RGB image (W x H, row-major, 3 bytes per pixel) as an 8-bit PNG.
 [[nodiscard]] bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error);
@@ -52,6 +53,41 @@ void report_episodes(RunReport& rep, const WorldSummary& s, real success_radius_
 /// as CSV with the columns "env,step," + columns. false (error names the file) if it cannot write.
 [[nodiscard]] bool write_trace_csv(const std::string& path, const char* columns, const real* trace, int envs,
                                    long long steps, std::string& error);
+
+/// Prints how to plot what a run wrote to out_dir ("  plot: kestrel plot DIR ..."): this program
+/// writes CSVs only; the Python package draws them. Not printed when KESTREL_PLOT_BY_CALLER is set
+/// (the console script's `kestrel run`, which plots right after).
+void print_plot_hint(const std::string& out_dir);
+
+/// `kestrel run`'s progress line (issue 15) on a terminal: "  env-steps 1.23M / 4.10M (30%),
+/// 2.05M env-steps/s, 1.4 s left", rewritten in place (carriage return, erase to end of line) at
+/// most every kIntervalS, the first time only kFirstAfterS into the run (a short run prints
+/// nothing), and once more, complete, with a newline by finish(). Disabled: prints nothing.
+class ProgressLine {
+ public:
+  static constexpr double kFirstAfterS = 0.5, kIntervalS = 0.25;
+  ProgressLine(std::FILE* out, bool enabled, double total_env_steps);
+  /// True when stderr is a terminal (the condition for enabling it, besides --quiet).
+  static bool stderr_is_terminal();
+  /// done env-steps at the steady clock's now.
+  void update(double done_env_steps);
+  /// done env-steps at elapsed_s since construction (the clock given, for tests).
+  void update_at(double done_env_steps, double elapsed_s);
+  /// The complete line and a newline, if a line was printed; nothing otherwise.
+  void finish();
+  void finish_at(double elapsed_s);
+  /// Lines printed so far (updates and the final one).
+  int lines() const { return lines_; }
+  /// The text of one line (no carriage return): what update_at prints.
+  static std::string format(double done_env_steps, double total_env_steps, double elapsed_s);
+
+ private:
+  std::FILE* out_;
+  bool enabled_;
+  double total_, last_done_ = 0, last_print_s_ = -1;
+  int lines_ = 0;
+  std::chrono::steady_clock::time_point t0_;
+};
 
 /// What a run prints as its summary, also kept to be written as DIR/summary.txt (`kestrel run
 /// --out DIR`, every run kind).

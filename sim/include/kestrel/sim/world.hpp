@@ -112,7 +112,10 @@ class World {
   void enable_trace(int num_envs, int max_env_steps);
   int trace_envs() const { return data_.trace_envs; }
   int trace_length() const { return data_.trace_len; }
-  const Vec3& trace_point(int env, int k) const { return data_.trace[static_cast<std::size_t>(env) * data_.trace_cap + k]; }
+  const Vec3& trace_point(int env, int k) const { return data_.trace[trace_index(env, k)]; }
+  /// The target of robot 0 and the episode number (resets of the environment before it) at point k.
+  const Vec3& trace_target(int env, int k) const { return data_.trace_target[trace_index(env, k)]; }
+  std::uint32_t trace_episode(int env, int k) const { return data_.trace_episode[trace_index(env, k)]; }
 
   // Sensors in the loop (config().robot.sensors; sensor index = position in that list). Ray
   // sensors (lidar, ToF, camera) render against the environment's obstacles every `every_env_steps`
@@ -193,6 +196,9 @@ class World {
  private:
   World() = default;
   std::size_t index(int env, int robot) const { return model_.index(env, robot); }
+  std::size_t trace_index(int env, int k) const {
+    return static_cast<std::size_t>(env) * static_cast<std::size_t>(data_.trace_cap) + static_cast<std::size_t>(k);
+  }
 
   WorldModel model_;  // compiled once by create(); never written by a step
   WorldData data_;    // everything a step writes

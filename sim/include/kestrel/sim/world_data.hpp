@@ -74,8 +74,12 @@ struct WorldData {
   std::vector<sensors::Aabb> scene_boxes;            // (E x S)
   std::vector<sensors::Scene> scenes;                // (E)
 
-  // Trace of robot 0's position (World::enable_trace): (trace_envs x trace_cap).
+  // Trace of robot 0's position (World::enable_trace): (trace_envs x trace_cap), with the target
+  // and the episode number (the environment's resets so far) of each point, so a plot can split
+  // the episodes and mark each one's start and target without guessing from jumps.
   std::vector<Vec3> trace;
+  std::vector<Vec3> trace_target;
+  std::vector<std::uint32_t> trace_episode;
   int trace_envs = 0, trace_cap = 0, trace_len = 0;
   std::uint64_t trace_base = 0;
 
