@@ -199,7 +199,7 @@ class ArticulatedSimulator final : public Simulator {
     drive_state_.assign(static_cast<std::size_t>(num_envs_), DriveState{});
     dr_kp_scale_.assign(n, 1);
     dr_kd_scale_.assign(n, 1);
-    for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeJointGains);
+    for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, c.env.global_env(e), kPurposeJointGains);
     stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
@@ -507,15 +507,17 @@ class ArticulatedSimulator final : public Simulator {
   }
 
   void place_origins() {
-    // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin).
-    const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(num_envs_)))));
+    // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin);
+    // the grid of the whole run (env.total_num_envs), a slice taking its own global cells.
+    const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(cfg_.env.run_num_envs())))));
     Vec3 centre = Vec3::Zero();
     if (terrain_->type() == TerrainType::heightfield)
       centre = terrain_->corner_w() + Vec3(terrain_->spacing_m() * static_cast<real>(terrain_->nx() - 1) / 2,
                                            terrain_->spacing_m() * static_cast<real>(terrain_->ny() - 1) / 2, 0);
     for (int e = 0; e < num_envs_; ++e) {
-      const real x = (static_cast<real>(e % cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
-      const real y = (static_cast<real>(e / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      const int g = static_cast<int>(cfg_.env.global_env(e));
+      const real x = (static_cast<real>(g % cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      const real y = (static_cast<real>(g / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
       Vec3 o(centre[0] + x, centre[1] + y, 0);
       o[2] = terrain_->height_at(o[0], o[1]);
       origins_[static_cast<std::size_t>(e)] = o;
