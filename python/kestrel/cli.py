@@ -2,6 +2,7 @@
 
     kestrel train TASK --learner rsl_rl --envs 256 --seed 0 --out runs/ps   # kestrel.train
     kestrel export --rsl-rl CKPT ... --onnx policy.onnx --header policy.hpp  # kestrel.export
+    kestrel sweep SCENARIO --grid KEY=V1,V2 --seeds 8 --address auto        # kestrel.cluster (Ray)
 
 `kestrel run SCENARIO` and the other scenario commands are the C++ CLI (build/host/sim/kestrel),
 which this command does not replace: any other command is handed to that program (KESTREL_CLI, or
@@ -16,6 +17,7 @@ import sys
 _COMMANDS = {
     "train": "train a policy with rsl_rl or Stable-Baselines3: progress bar, evaluations, checkpoints, TensorBoard, CSV, plot, ONNX",
     "export": "export a trained actor to a C++ header (firmware) and/or ONNX",
+    "sweep": "fan a scenario over a parameter grid / random draws and seeds on Ray (or this process): table, plot, combined hash",
 }
 
 
@@ -40,10 +42,14 @@ def main(argv: list[str] | None = None) -> int:
         from .export import main as export_main
 
         return export_main(rest, prog="kestrel export")
+    if cmd == "sweep":  # kestrel.cluster: Ray tasks (or this process)
+        from .cluster import sweep_main
+
+        return sweep_main(rest, prog="kestrel sweep")
     cxx = os.environ.get("KESTREL_CLI") or os.path.join("build", "host", "sim", "kestrel")
     if os.path.isfile(cxx) and os.access(cxx, os.X_OK):
         os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel run / list / ...
-    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export)\n\n{_usage()}",
+    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export, sweep)\n\n{_usage()}",
           file=sys.stderr)
     return 2
 
