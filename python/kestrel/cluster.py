@@ -411,15 +411,19 @@ class SweepResult:
         import matplotlib.pyplot as plt
 
         ok = [r for r in self.rows if r["status"] == "ok"]
-        keys = [k for k, _ in json.loads(ok[0]["params"]).items()] if ok else []
-        xkey = next((k for k in keys if all(isinstance(json.loads(r["params"])[k], (int, float)) for r in ok)), None)
-        if xkey is not None:
-            xs = [json.loads(r["params"])[xkey] for r in ok]
-            xlabel = xkey
-        elif keys:  # non-numeric parameter values: one x position per distinct value
-            labels = sorted({json.dumps(json.loads(r["params"])[keys[0]]) for r in ok})
-            xs = [labels.index(json.dumps(json.loads(r["params"])[keys[0]])) for r in ok]
-            xlabel = f"{keys[0]} (" + ", ".join(f"{i}: {l}" for i, l in enumerate(labels)) + ")"
+        params = [json.loads(r["params"]) for r in ok]
+        keys = list(params[0]) if ok else []
+        # x: the parameter with the most distinct values (numbers on a number axis; lists, names and
+        # booleans one position per value), else the seed.
+        distinct = {k: sorted({json.dumps(p[k]) for p in params}) for k in keys}
+        xkey = max(keys, key=lambda k: len(distinct[k]), default=None)
+        if xkey is not None and len(distinct[xkey]) > 1 and all(
+                isinstance(p[xkey], (int, float)) and not isinstance(p[xkey], bool) for p in params):
+            xs, xlabel = [p[xkey] for p in params], xkey
+        elif xkey is not None and len(distinct[xkey]) > 1:
+            labels = distinct[xkey]
+            xs = [labels.index(json.dumps(p[xkey])) for p in params]
+            xlabel = f"{xkey} (" + ", ".join(f"{i}: {l}" for i, l in enumerate(labels)) + ")"
         else:
             xs, xlabel = [r["seed"] for r in ok], "seed"
         fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
@@ -428,7 +432,9 @@ class SweepResult:
         seeds = [r["seed"] for r in ok]
         for a, (k, lab) in zip(ax, panels):
             a.scatter(xs, [r[k] for r in ok], c=seeds, cmap="viridis", s=18)
-            a.set_xlabel(xlabel if len(xlabel) < 60 else xlabel[:57] + "...")
+            a.set_xlabel(xlabel if len(xlabel) < 70 else xlabel[:67] + "...", fontsize=8)
+            if xlabel.endswith(")") and xkey is not None and xlabel.startswith(f"{xkey} ("):
+                a.set_xticks(range(len(distinct[xkey])))
             a.set_ylabel(lab)
             a.grid(alpha=0.3)
         ne = len(self.rows) - len(ok)
@@ -443,7 +449,7 @@ class SweepResult:
 
 def sweep(scenario: Any, *, grid: Mapping[str, Sequence] | None = None, random: Mapping[str, Any] | None = None,
           samples: int = 0, seeds: int | Sequence[int] = 1, sample_seed: int = 0, task: str | None = None,
-          envs: int = 64, steps: int = 500, threads: int = 1, policy: str = "scripted", address: str | None = None,
+          envs: int = 64, steps: int = 1000, threads: int = 1, policy: str = "scripted", address: str | None = None,
           workers: int | None = None, runs_per_task: int = 1, max_retries: int = 3, progress: bool = False,
           on_run_start: Callable[[int], None] | None = None, submit_order: Sequence[int] | None = None) -> SweepResult:
     """Fans a scenario out over Ray tasks and gathers one row per run (see the module's doc).
@@ -525,13 +531,16 @@ def sweep(scenario: Any, *, grid: Mapping[str, Sequence] | None = None, random: 
     if missing or len(by_id) != len(runs):
         raise RuntimeError(f"sweep: runs missing from the results: {missing[:20]}")
     rows = [by_id[r.run_id] for r in runs]
-    # Parameter columns (one per key) beside the JSON `params`, for tables and plots.
+    # Parameter columns (one per key) beside the JSON `params`, for tables and plots: numbers stay
+    # numbers and booleans booleans where every run's value is one; anything else is JSON text, so
+    # each column has one type (Parquet).
     keys = list(dict.fromkeys(k for r in runs for k, _ in r.params))
-    for r in rows:
-        p = json.loads(r["params"])
-        for k in keys:
-            v = p.get(k)
-            r[f"p.{k}"] = v if isinstance(v, (int, float, str, bool)) or v is None else json.dumps(v)
+    values = {k: [dict(s.params).get(k) for s in runs] for k in keys}
+    for k, vs in values.items():
+        numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vs)
+        boolean = all(isinstance(v, bool) for v in vs)
+        for r, v in zip(rows, vs):
+            r[f"p.{k}"] = float(v) if numeric else v if boolean else json.dumps(v)
     return SweepResult(rows, combined_hash(rows), time.perf_counter() - t0, used_workers, len(chunks), settings)
 
 
@@ -768,7 +777,7 @@ def sweep_main(argv: list[str] | None = None, prog: str = "kestrel sweep") -> in
     p.add_argument("--sample-seed", type=int, default=0, help="seed of the random points' draw")
     p.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 per point")
     p.add_argument("--envs", type=int, default=64, help="environments of each run's batched world")
-    p.add_argument("--steps", type=int, default=500, help="task steps per run")
+    p.add_argument("--steps", type=int, default=1000, help="task steps per run (position_setpoint_task: 500 per episode)")
     p.add_argument("--threads", type=int, default=1, help="simulator threads per run (the Ray task's CPUs)")
     p.add_argument("--policy", choices=["scripted", "zero"], default="scripted")
     p.add_argument("--address", default=None,
