@@ -239,6 +239,31 @@ def test_sweep_command_writes_table_plot_and_hash(ray_cluster, reference, tmp_pa
     assert main(["sweep", "position_setpoint_task", "--grid", "nokey"]) == 2
 
 
+def test_sweep_command_connects_to_a_cluster_by_address(ray_cluster, reference, tmp_path):
+    """`kestrel sweep --address HEAD:PORT` from another process, as a user points it at a cluster."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "sw"
+    p = subprocess.run([sys.executable, "-m", "kestrel", "sweep", "position_setpoint_task", "--task-len", "x"],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and "unrecognized arguments" in p.stderr
+    cmd = [sys.executable, "-m", "kestrel", "sweep", str(_write_scen(tmp_path)),
+           "--grid", "controller.k_pos=[[2.5,2.5,1.5],[-1.0,2.0,1.0]]", "--grid", "env.enable_disturbance=false,true",
+           "--seeds", "3", "--envs", str(ENVS), "--steps", str(STEPS), "--address", ray_cluster.address,
+           "--out", str(out), "--format", "csv", "--quiet"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert json.loads((out / "sweep.json").read_text())["combined_hash"] == reference.combined_hash
+    assert "run 6 (seed 0" in p.stdout and "controller.k_pos[0]: expected a number in [0, 1e+06]" in p.stdout
+
+
+def _write_scen(d):
+    f = d / "ps.yaml"
+    f.write_text("task: {name: position_setpoint_task, episode_len_env_steps: 200}\n")
+    return f
+
+
 # ---- rollouts ----------------------------------------------------------------------------------------
 
 ROLL_OVER = {"task": {"episode_len_env_steps": 12}, "action_scale": [2, 2, 2, 1], "vehicle_frame_obs": True}
