@@ -154,10 +154,13 @@ def scenario(source: Any = None, *, task_id: str | None = None, num_envs: int | 
         cfg.total_num_envs = int(total_num_envs)
     # The slice must lie inside its run (the scenario file's own values are checked by the parser;
     # num_envs may have changed since).
-    if cfg.first_env_index + cfg.num_envs > (cfg.total_num_envs or (1 << 20)):
-        raise ValueError(f"first_env_index: environments {cfg.first_env_index}..{cfg.first_env_index + cfg.num_envs - 1} "
-                         f"lie beyond total_num_envs {cfg.total_num_envs or 1 << 20}; expected first_env_index + num_envs "
-                         f"<= total_num_envs")
+    last = cfg.first_env_index + cfg.num_envs - 1
+    if cfg.total_num_envs and last >= cfg.total_num_envs:
+        raise ValueError(f"first_env_index: environments {cfg.first_env_index}..{last} lie beyond total_num_envs "
+                         f"{cfg.total_num_envs}; expected first_env_index + num_envs <= total_num_envs")
+    if last >= 1 << 20:
+        raise ValueError(f"first_env_index: environments {cfg.first_env_index}..{last} lie beyond the limit of "
+                         f"{1 << 20} environments (kMaxNumEnvs); expected first_env_index + num_envs <= {1 << 20}")
     # As `kestrel run`: every core unless threads is given (results are identical for any count).
     cfg.num_threads = int(threads) if threads is not None else _default_threads()
     return cfg
