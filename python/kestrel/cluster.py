@@ -289,7 +289,7 @@ def _finish_row(row: dict, t0: float) -> dict:
     return row
 
 
-def run_one(scenario: Any, spec: RunSpec, envs: int = 64, steps: int = 500, threads: int = 1, policy: str = "scripted",
+def run_one(scenario: Any, spec: RunSpec, envs: int = 64, steps: int = 1000, threads: int = 1, policy: str = "scripted",
             on_run_start: Callable[[int], None] | None = None) -> dict:
     """Runs one sweep run in this process and returns its row: the scenario with spec.params set
     (dotted keys), spec.seed, ``envs`` environments, ``steps`` task steps under the task's scripted
