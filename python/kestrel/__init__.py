@@ -110,13 +110,17 @@ def _merge(base: dict, over: Mapping[str, Any]) -> dict:
 
 
 def scenario(source: Any = None, *, task_id: str | None = None, num_envs: int | None = None, seed: int | None = None,
-             threads: int | None = None, **overrides: Any) -> Config:
+             threads: int | None = None, first_env_index: int | None = None, total_num_envs: int | None = None,
+             **overrides: Any) -> Config:
     """A parsed scenario (kestrel.Config) from a file path, YAML text or a dict (the scenario file's
     sections: sim, env, robot, controller, task, sensors, seed, threads, simulator), with `task_id`
     naming an RL task and `overrides` merged into the dict's sections (e.g. controller=
     "lee_velocity_control", task={"episode_len_env_steps": 300}). num_envs, seed and threads are
-    set last, as `kestrel run --envs --seed --threads` does. Errors (ValueError) name the field and
-    the allowed values."""
+    set last, as `kestrel run --envs --seed --threads` does. first_env_index / total_num_envs
+    (env.first_env_index / env.total_num_envs) make the world environments first_env_index ..
+    first_env_index + num_envs - 1 of a run of total_num_envs: each behaves as that environment of
+    the whole run (its random streams, its grid cell), which kestrel.cluster's rollout actors use.
+    Errors (ValueError) name the field and the allowed values."""
     if isinstance(source, Config):
         if task_id is not None or overrides:
             raise ValueError("scenario: a parsed Config takes num_envs/seed/threads only; pass a dict to override sections")
@@ -144,6 +148,19 @@ def scenario(source: Any = None, *, task_id: str | None = None, num_envs: int | 
         cfg.num_envs = int(num_envs)
     if seed is not None:
         cfg.seed = int(seed)
+    if first_env_index is not None:
+        cfg.first_env_index = int(first_env_index)
+    if total_num_envs is not None:
+        cfg.total_num_envs = int(total_num_envs)
+    # The slice must lie inside its run (the scenario file's own values are checked by the parser;
+    # num_envs may have changed since).
+    last = cfg.first_env_index + cfg.num_envs - 1
+    if cfg.total_num_envs and last >= cfg.total_num_envs:
+        raise ValueError(f"first_env_index: environments {cfg.first_env_index}..{last} lie beyond total_num_envs "
+                         f"{cfg.total_num_envs}; expected first_env_index + num_envs <= total_num_envs")
+    if last >= 1 << 20:
+        raise ValueError(f"first_env_index: environments {cfg.first_env_index}..{last} lie beyond the limit of "
+                         f"{1 << 20} environments (kMaxNumEnvs); expected first_env_index + num_envs <= {1 << 20}")
     # As `kestrel run`: every core unless threads is given (results are identical for any count).
     cfg.num_threads = int(threads) if threads is not None else _default_threads()
     return cfg

@@ -4,6 +4,7 @@
     kestrel export --rsl-rl CKPT ... --onnx policy.onnx --header policy.hpp  # kestrel.export
     kestrel view [SCENARIO] | --replay run.mcap; kestrel teleop [SCENARIO]   # kestrel.viewer
     kestrel run SCENARIO --record run.mcap [--view]                          # kestrel.record
+    kestrel sweep SCENARIO --grid KEY=V1,V2 --seeds 8 --address auto        # kestrel.cluster (Ray)
 
 `kestrel run SCENARIO` and the other scenario commands are the C++ CLI (build/host/sim/kestrel),
 which this command does not replace: any other command is handed to that program (KESTREL_CLI, or
@@ -24,6 +25,7 @@ _COMMANDS = {
     "teleop": "the viewer with robot 0 of env 0 driven from the page's keyboard and mouse",
     "plot": "draw a run's figures (trajectory.png, curves.png) from its CSVs with matplotlib",
     "run": "the C++ harness's `kestrel run`, then its trajectory plot (--no-plot: without; --record FILE / --view: through the bindings)",
+    "sweep": "fan a scenario over a parameter grid / random draws and seeds on Ray (or this process): table, plot, combined hash",
 }
 
 
@@ -61,12 +63,16 @@ def main(argv: list[str] | None = None) -> int:
         from .plots import main as plot_main
 
         return plot_main(rest, prog="kestrel plot")
+    if cmd == "sweep":  # kestrel.cluster: Ray tasks (or this process)
+        from .cluster import sweep_main
+
+        return sweep_main(rest, prog="kestrel sweep")
     cxx = os.environ.get("KESTREL_CLI") or os.path.join("build", "host", "sim", "kestrel")
     if os.path.isfile(cxx) and os.access(cxx, os.X_OK):
         if cmd == "run":
             return _run_and_plot(cxx, rest)
         os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel list / schema / ...
-    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export)\n\n{_usage()}",
+    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export, view, teleop, plot, sweep)\n\n{_usage()}",
           file=sys.stderr)
     return 2
 

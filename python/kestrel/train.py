@@ -499,6 +499,11 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                         + ", ".join(sorted(_VEHICLE_FRAME_OBS)) + ")")
     p.add_argument("--tensorboard", type=int, default=1, help="TensorBoard event files in --out (1/0)")
     p.add_argument("--export", type=int, default=1, help="write the final policy as --out/policy.onnx and policy.hpp (1/0)")
+    p.add_argument("--address", default=None,
+                   help="train with the environments in Ray actors (kestrel.cluster.RayVectorEnv): auto, ray://HOST:10001, "
+                        "HOST:6379, or local (a Ray on this machine); the learner stays in this process")
+    p.add_argument("--rollout-workers", type=int, default=None,
+                   help="Ray actors holding the environments (each a slice, --threads threads each; default 2 with --address)")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
     legged = GYM_IDS.get(args.task, (args.task,))[0] == "locomotion_task"
@@ -538,7 +543,18 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     if args.episode_len:
         overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
-    env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
+    if args.address is not None or args.rollout_workers is not None:
+        # Environments on a Ray cluster, in slices keyed by global index: the same batches as one
+        # process's make_vec for any number of workers (kestrel.cluster).
+        from .cluster import RayVectorEnv
+
+        workers = args.rollout_workers or 2
+        if workers < 1:
+            raise SystemExit(f"--rollout-workers: expected an integer >= 1, got {workers}")
+        env = RayVectorEnv(args.task, num_envs=args.envs, seed=args.seed, workers=workers, threads=args.threads or 1,
+                           address=None if args.address in (None, "local") else args.address, **overrides)
+    else:
+        env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
     eval_overrides = dict(overrides)
     if env.task.name == "navigation_task" and args.eval_level != "train":
         # Evaluated at one level, held (no curriculum steps): Aerial Gym reports its navigation

@@ -31,6 +31,7 @@
 
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/robots/multirotor.hpp"
+#include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/scenario.hpp"
@@ -113,10 +114,10 @@ struct KConfig {
   std::string source;
 };
 
-KConfig load_string(const std::string& text, const std::string& name) {
+KConfig load_string(const std::string& text, const std::string& name, const std::string& base_dir) {
   KConfig c;
   std::string err;
-  if (!ks::load_scenario_string(text, name, c.cfg, err)) throw nb::value_error(("scenario " + err).c_str());
+  if (!ks::load_scenario_string(text, name, base_dir, c.cfg, err)) throw nb::value_error(("scenario " + err).c_str());
   c.source = name;
   return c;
 }
@@ -176,12 +177,36 @@ nb::dict infos_dict(const ks::TaskInfos& in) {
   d["truncations"] = in.truncations;
   d["crashes"] = in.crashes;
   d["successes"] = in.successes;
+  d["fallback_episodes"] = in.fallback_episodes;
   d["episode_reward_sum"] = in.episode_reward_sum;
   d["mean_episode_reward"] = in.mean_episode_reward();
   d["success_rate"] = in.success_rate();
   d["curriculum_level"] = in.curriculum_level;
   d["mean_terrain_level"] = in.mean_terrain_level;
   d["curriculum_changes"] = in.curriculum_changes;
+  return d;
+}
+
+// The run summary `kestrel run` prints (sim/summary.hpp WorldSummary), for per-run tables (kestrel.cluster's
+// sweeps) computed by the same C++ as the CLI's.
+nb::dict summary_dict(const ks::WorldSummary& s) {
+  nb::dict d;
+  d["env_steps"] = s.env_steps;
+  d["crashes"] = s.crashes;
+  d["resets"] = s.resets;
+  d["timeouts"] = s.timeouts;
+  d["out_of_bounds"] = s.out_of_bounds;
+  d["episodes_done"] = s.episodes_done;
+  d["successes"] = s.successes;
+  d["real_episodes"] = s.real_episodes();
+  d["placements"] = s.placements;
+  d["placement_fallbacks"] = s.placement_fallbacks;
+  d["fallback_episodes"] = s.fallback_episodes;
+  d["mean_tracking_error_m"] = s.mean_tracking_error_m;
+  d["final_mean_distance_m"] = s.final_mean_distance_m;
+  d["episode_end_distance_m"] = s.episode_end_distance_m;
+  d["fault_bits"] = s.fault_bits;
+  d["reset_errors"] = s.reset_errors;
   return d;
 }
 
@@ -583,6 +608,24 @@ NB_MODULE(_core, m) {
             c.cfg.env.num_envs = v;
           })
       .def_prop_rw(
+          "first_env_index", [](const KConfig& c) { return c.cfg.env.first_env_index; },
+          [](KConfig& c, int v) {
+            if (v < 0 || v >= ks::kMaxNumEnvs)
+              throw nb::value_error(("first_env_index: expected an integer in [0, " + std::to_string(ks::kMaxNumEnvs - 1) + "], got " +
+                                     std::to_string(v)).c_str());
+            c.cfg.env.first_env_index = v;
+          },
+          "env.first_env_index: global index of environment 0 when this world is a slice of a larger run.")
+      .def_prop_rw(
+          "total_num_envs", [](const KConfig& c) { return c.cfg.env.total_num_envs; },
+          [](KConfig& c, int v) {
+            if (v < 0 || v > ks::kMaxNumEnvs)
+              throw nb::value_error(("total_num_envs: expected 0 or an integer in [1, " + std::to_string(ks::kMaxNumEnvs) + "], got " +
+                                     std::to_string(v)).c_str());
+            c.cfg.env.total_num_envs = v;
+          },
+          "env.total_num_envs: environments of the whole run this world is a slice of (0: num_envs).")
+      .def_prop_rw(
           "num_threads", [](const KConfig& c) { return c.cfg.num_threads; },
           [](KConfig& c, int v) {
             if (v < 1) throw nb::value_error(("threads: expected an integer >= 1, got " + std::to_string(v)).c_str());
@@ -618,8 +661,9 @@ NB_MODULE(_core, m) {
                ", seed=" + std::to_string(c.cfg.seed) + ", threads=" + std::to_string(c.cfg.num_threads) + ")";
       });
 
-  m.def("load_scenario_string", &load_string, "text"_a, "name"_a = "<string>",
-        "Parses a scenario from YAML text (JSON is YAML too); ValueError names the field and the allowed values.");
+  m.def("load_scenario_string", &load_string, "text"_a, "name"_a = "<string>", "base_dir"_a = "",
+        "Parses a scenario from YAML text (JSON is YAML too); files it names are relative to base_dir (default: the "
+        "current directory). ValueError names the field and the allowed values.");
   m.def(
       "register_preset",
       [](const std::string& kind, const std::string& name, const std::string& section, const std::string& description) {
@@ -660,6 +704,10 @@ NB_MODULE(_core, m) {
           nb::rv_policy::take_ownership, nb::keep_alive<0, 1>(),
           "The Simulator the task steps (its views, world_data(), obstacles(), ...), kept alive with the task.\n"
           "Read it between task steps; stepping or resetting it yourself changes the task's episodes.")
+      .def_prop_ro(
+          "summary", [](KTask& p) { return summary_dict(p.t().simulator().summary()); },
+          "The simulator's run summary, as `kestrel run` prints it (sim/summary.hpp): env_steps, crashes, resets, "
+          "timeouts, episodes_done, successes, mean_tracking_error_m, final_mean_distance_m, fault_bits, reset_errors, ...")
       .def_prop_ro(
           "infos",
           [](KTask& p) {
@@ -793,6 +841,9 @@ NB_MODULE(_core, m) {
       .def_prop_ro("dt_s", [](KSimulator& s) { return static_cast<double>(s.sim->dt_s()); })
       .def_prop_ro("lidar_beams", [](KSimulator& s) { return s.sim->lidar_beams(); })
       .def_prop_ro("state_hash", [](KSimulator& s) { return s.sim->state_hash(); })
+      .def_prop_ro(
+          "summary", [](KSimulator& s) { return summary_dict(s.sim->summary()); },
+          "The run summary, as `kestrel run` prints it (sim/summary.hpp WorldSummary) as a dict.")
       .def_prop_ro("step_heap_fallbacks", [](KSimulator& s) { return s.sim->step_heap_fallbacks(); })
       .def(
           "step",

@@ -205,7 +205,7 @@ class ArticulatedSimulator final : public Simulator {
     drive_state_.assign(static_cast<std::size_t>(num_envs_), DriveState{});
     dr_kp_scale_.assign(n, 1);
     dr_kd_scale_.assign(n, 1);
-    for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeJointGains);
+    for (int e = 0; e < num_envs_; ++e) rng_gains_.emplace_back(c.seed, c.env.global_env(e), kPurposeJointGains);
     const SimulatorConfig& sc = c.simulator;
     dr_friction_.assign(n, sc.friction_min == -1 ? -1_r : sc.friction_min);
     dr_restitution_.assign(n, sc.restitution_min == -1 ? -1_r : sc.restitution_min);
@@ -216,15 +216,15 @@ class ArticulatedSimulator final : public Simulator {
                          sc.joint_armature_min_kg_m2 != -1;
     randomise_contacts_ = sc.friction_min != -1 || sc.restitution_min != -1;
     for (int e = 0; e < num_envs_; ++e) {
-      rng_dr_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeDomainRand);
-      rng_link_push_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeLinkPush);
+      rng_dr_.emplace_back(c.seed, c.env.global_env(e), kPurposeDomainRand);
+      rng_link_push_.emplace_back(c.seed, c.env.global_env(e), kPurposeLinkPush);
     }
     link_push_w_.assign(n * static_cast<std::size_t>(m.num_bodies) * 3, 0);
     link_push_due_.assign(n, 0);
     stats_.assign(static_cast<std::size_t>(num_envs_), EnvStats{});
     step_errors_.assign(static_cast<std::size_t>(num_envs_), 0);
     origins_.resize(static_cast<std::size_t>(num_envs_));
-    for (int e = 0; e < num_envs_; ++e) rng_terrain_.emplace_back(c.seed, static_cast<std::uint32_t>(e), kPurposeTerrainLevel);
+    for (int e = 0; e < num_envs_; ++e) rng_terrain_.emplace_back(c.seed, c.env.global_env(e), kPurposeTerrainLevel);
     place_origins();
     if (c.env.terrain.measure_heights) {
       // legged_gym's height points: the x list times the y list, x-major (as the World's).
@@ -643,28 +643,30 @@ class ArticulatedSimulator final : public Simulator {
 
   void place_origins() {
     if (terrain_->tile_rows() > 0) {
-      // legged_gym's custom origins: environment e on terrain type (column) e * cols / envs, at a
-      // level drawn in [0, max_init_terrain_level] (below the top row).
+      // legged_gym's custom origins: environment e on terrain type (column) e * cols / envs (global
+      // index over the whole run), at a level drawn in [0, max_init_terrain_level] (below the top row).
       const int rows = terrain_->tile_rows(), cols = terrain_->tile_cols();
       num_terrain_levels_ = rows;
       const int top = std::min(rows - 1, std::max(0, cfg_.env.terrain.max_init_terrain_level));
       for (int e = 0; e < num_envs_; ++e) {
         const std::size_t ei = static_cast<std::size_t>(e);
-        terrain_types_[ei] = static_cast<int>(static_cast<long long>(e) * cols / num_envs_);
+        terrain_types_[ei] = static_cast<int>(static_cast<long long>(cfg_.env.global_env(e)) * cols / cfg_.env.run_num_envs());
         terrain_levels_[ei] = static_cast<int>(rng_terrain_[ei].next_u32() % static_cast<std::uint32_t>(top + 1));
         set_origin(ei, terrain_->tile_origin(terrain_levels_[ei], terrain_types_[ei]));
       }
       return;
     }
-    // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin).
-    const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(num_envs_)))));
+    // A square grid of environments, kEnvSpacing_m apart, centred on the height field (or the origin);
+    // the grid of the whole run (env.total_num_envs), a slice taking its own global cells.
+    const int cols = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(cfg_.env.run_num_envs())))));
     Vec3 centre = Vec3::Zero();
     if (terrain_->type() == TerrainType::heightfield)
       centre = terrain_->corner_w() + Vec3(terrain_->spacing_m() * static_cast<real>(terrain_->nx() - 1) / 2,
                                            terrain_->spacing_m() * static_cast<real>(terrain_->ny() - 1) / 2, 0);
     for (int e = 0; e < num_envs_; ++e) {
-      const real x = (static_cast<real>(e % cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
-      const real y = (static_cast<real>(e / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      const int g = static_cast<int>(cfg_.env.global_env(e));
+      const real x = (static_cast<real>(g % cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
+      const real y = (static_cast<real>(g / cols) - static_cast<real>(cols - 1) / 2) * kEnvSpacing_m;
       Vec3 o(centre[0] + x, centre[1] + y, 0);
       o[2] = terrain_->height_at(o[0], o[1]);
       set_origin(static_cast<std::size_t>(e), o);

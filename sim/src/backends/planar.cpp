@@ -604,8 +604,8 @@ class PlanarSimulator final : public Simulator {
     ev.contacts.normal_sum_N = &normal_sum_[static_cast<std::size_t>(ei * robots_per_env_)];
     ev.contacts.inv_dt = 1.0f / static_cast<float>(cfg_.sim.dt_s);
     ev.world->SetContactListener(&ev.contacts);
-    ev.rng_reset = RngStream(cfg_.seed, static_cast<std::uint32_t>(ei), kPurposeReset);
-    ev.rng_step = RngStream(cfg_.seed, static_cast<std::uint32_t>(ei), kPurposeDisturbance);
+    ev.rng_reset = RngStream(cfg_.seed, cfg_.env.global_env(static_cast<int>(ei)), kPurposeReset);
+    ev.rng_step = RngStream(cfg_.seed, cfg_.env.global_env(static_cast<int>(ei)), kPurposeDisturbance);
     for (int r = 0; r < robots_per_env_; ++r) {
       b2BodyDef bd;
       bd.type = b2_dynamicBody;

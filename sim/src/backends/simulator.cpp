@@ -99,7 +99,7 @@ void Simulator::allocate_views(const WorldConfig& cfg, int action_dim, int lidar
   gain_scale_.assign(n, 1);
   lidar_.assign(n * static_cast<std::size_t>(lidar_beams), 0);
   rng_push_.resize(static_cast<std::size_t>(num_envs_));
-  for (int e = 0; e < num_envs_; ++e) rng_push_[static_cast<std::size_t>(e)] = RngStream(cfg.seed, static_cast<std::uint32_t>(e), kPurposePush);
+  for (int e = 0; e < num_envs_; ++e) rng_push_[static_cast<std::size_t>(e)] = RngStream(cfg.seed, cfg.env.global_env(e), kPurposePush);
 }
 
 void Simulator::write_euler_view(std::size_t i) const {

@@ -28,6 +28,12 @@ bool check_config_limits(const WorldConfig& c, std::string& error) {
   };
   const EnvConfig& e = c.env;
   if (!in("env.num_envs", e.num_envs, 1, kMaxNumEnvs, "kMaxNumEnvs")) return false;
+  // A slice's environments must be inside the run it is a slice of (and global indices fit the limit).
+  if (!in("env.first_env_index", e.first_env_index, 0, kMaxNumEnvs - e.num_envs, "kMaxNumEnvs - env.num_envs")) return false;
+  if (e.total_num_envs != 0 &&
+      !in("env.total_num_envs", e.total_num_envs, static_cast<long long>(e.first_env_index) + e.num_envs, kMaxNumEnvs,
+          "0, or at least env.first_env_index + env.num_envs"))
+    return false;
   if (!in("robot.robots_per_env", c.robot.robots_per_env, 1, kMaxRobotsPerEnv, "kMaxRobotsPerEnv")) return false;
   if (!in("sim.substeps", c.sim.substeps, 1, kMaxSubsteps, "kMaxSubsteps")) return false;
   if (!in_real("env.num_physics_steps_per_env_step_mean", static_cast<double>(e.num_physics_steps_per_env_step_mean), 1,

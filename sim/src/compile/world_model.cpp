@@ -200,7 +200,7 @@ void make_world_data(const WorldModel& m, WorldData& d) {
   d.rng_place.resize(ne);
   d.rng_sensor.resize(ne);
   for (std::size_t i = 0; i < ne; ++i) {
-    const auto env = static_cast<std::uint32_t>(i);
+    const std::uint32_t env = cfg.env.global_env(static_cast<int>(i));
     d.rng_reset[i] = RngStream(cfg.seed, env, kPurposeReset);
     d.rng_step[i] = RngStream(cfg.seed, env, kPurposeDisturbance);
     d.rng_place[i] = RngStream(cfg.seed, env, kPurposePlacement);

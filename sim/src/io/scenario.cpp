@@ -477,6 +477,13 @@ bool load_scenario_string(const std::string& text, const std::string& source_nam
   return load([&] { return YAML::Load(text); }, source_name, "", out, error);
 }
 
+bool load_scenario_string(const std::string& text, const std::string& source_name, const std::string& base_dir,
+                          WorldConfig& out, std::string& error) {
+  std::string dir = base_dir;
+  if (!dir.empty() && dir.back() != '/') dir += '/';
+  return load([&] { return YAML::Load(text); }, source_name, dir, out, error);
+}
+
 bool register_preset(const std::string& kind, const std::string& name, const std::string& section_yaml,
                      const std::string& description, std::string& error) {
   const std::string where = "register " + kind + " \"" + name + "\": ";

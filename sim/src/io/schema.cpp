@@ -201,6 +201,10 @@ const Schema<EnvConfig>& env_schema() {
   using S = EnvConfig;
   static const Field<S> f[] = {
       int_f<S>("num_envs", &S::num_envs, 1, kMaxNumEnvs, "kMaxNumEnvs", "parallel environments"),
+      int_f<S>("first_env_index", &S::first_env_index, 0, kMaxNumEnvs - 1, "kMaxNumEnvs - 1",
+               "global index of environment 0 when this world is a slice of a larger run (random streams and env grid as that run's)"),
+      int_f<S>("total_num_envs", &S::total_num_envs, 0, kMaxNumEnvs, "kMaxNumEnvs",
+               "environments of the whole run this world is a slice of (0: num_envs; sizes the articulated env grid)"),
       real_f<S>("num_physics_steps_per_env_step_mean", &S::num_physics_steps_per_env_step_mean, "", 1, kMaxPhysicsStepsPerEnvStep,
                 "physics steps per env-step (decimation), mean"),
       real_f<S>("num_physics_steps_per_env_step_std", &S::num_physics_steps_per_env_step_std, "", 0, kMaxPhysicsStepsPerEnvStep,

@@ -35,7 +35,7 @@ int run_scripted(Simulator& sim, const std::string& label, long long steps, cons
   // about the home pose), redrawn every 25 env-steps from each robot's own stream.
   const int nd = sim.num_dofs();
   std::vector<RngStream> target_rng;
-  for (int i = 0; nd > 0 && i < sim.num_robots(); ++i) target_rng.emplace_back(cfg.seed, static_cast<std::uint32_t>(i), kPurposeScriptedTargets);
+  for (int i = 0; nd > 0 && i < sim.num_robots(); ++i) target_rng.emplace_back(cfg.seed, static_cast<std::uint32_t>(cfg.env.first_env_index * sim.robots_per_env() + i), kPurposeScriptedTargets);
   if (nd > 0)
     rep.say("  articulated: %d joints, %d feet, %d links; random joint targets every 25 env-steps\n", nd, sim.num_feet(), sim.num_links());
   for (long long s = 0; s < steps; ++s) {

@@ -325,7 +325,7 @@ class CustomTask final : public Task, public CustomTaskView {
     action_prev_.assign(n * kActionDim, 0.0f);
     boxes_.reserve(no);
     rng_.resize(n);
-    for (std::size_t e = 0; e < n; ++e) rng_[e] = RngStream(sim_->config().seed, static_cast<std::uint32_t>(e), kPurposeTaskRandomise);
+    for (std::size_t e = 0; e < n; ++e) rng_[e] = RngStream(sim_->config().seed, sim_->config().env.global_env(static_cast<int>(e)), kPurposeTaskRandomise);
     kind_ = sim_->config().controller.kind;
     flat_ = sim_->holds_altitude();
     reset();

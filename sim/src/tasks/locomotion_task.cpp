@@ -228,9 +228,10 @@ class LocomotionTask final : public Task {
     reset_vel_.assign(nd, 0);
     const std::uint64_t seed = sim.config().seed;
     for (int e = 0; e < num_envs_; ++e) {
-      rng_cmd_.emplace_back(seed, static_cast<std::uint32_t>(e), kPurposeLocoCommands);
-      rng_noise_.emplace_back(seed, static_cast<std::uint32_t>(e), kPurposeLocoNoise);
-      rng_reset_.emplace_back(seed, static_cast<std::uint32_t>(e), kPurposeLocoReset);
+      const std::uint32_t g = sim.config().env.global_env(e);
+      rng_cmd_.emplace_back(seed, g, kPurposeLocoCommands);
+      rng_noise_.emplace_back(seed, g, kPurposeLocoNoise);
+      rng_reset_.emplace_back(seed, g, kPurposeLocoReset);
     }
     reset();
   }

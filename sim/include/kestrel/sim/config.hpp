@@ -120,6 +120,16 @@ struct TerrainConfig {
 struct EnvConfig {
   std::string name = "empty";
   int num_envs = 1024;
+  // A world that is one slice of a larger run (kestrel.cluster's rollout actors): its environment k
+  // is global environment first_env_index + k of a run of total_num_envs (0: num_envs), so that its
+  // random streams RngStream(seed, global index, purpose) and its place in an environment grid (the
+  // articulated backend's origins) are those of the single-process run, whatever the split.
+  int first_env_index = 0;
+  int total_num_envs = 0;
+  /// The global index of local environment `local` (the env key of every per-environment stream).
+  std::uint32_t global_env(int local) const { return static_cast<std::uint32_t>(first_env_index + local); }
+  /// Environments of the whole run this world is a slice of.
+  int run_num_envs() const { return total_num_envs > 0 ? total_num_envs : num_envs; }
   real num_physics_steps_per_env_step_mean = 1;
   real num_physics_steps_per_env_step_std = 0;
   // Bounds, re-sampled per reset: lower in [lower_min, lower_max], upper in [upper_min, upper_max].

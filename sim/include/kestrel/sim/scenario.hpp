@@ -24,6 +24,11 @@ namespace kestrel::sim {
 /// `source_name` is what messages call the text (a file name, "<embedded default>").
 [[nodiscard]] bool load_scenario_string(const std::string& text, const std::string& source_name, WorldConfig& out,
                                         std::string& error);
+/// The same with the files the text names (meshes, height maps, robot files) relative to `base_dir`
+/// (ending in '/'), as they are to a scenario file's folder: a file's scenario edited in memory
+/// (kestrel.cluster's sweeps) keeps its meaning.
+[[nodiscard]] bool load_scenario_string(const std::string& text, const std::string& source_name, const std::string& base_dir,
+                                        WorldConfig& out, std::string& error);
 
 /// Registers a preset at run time (Aerial Gym's register_sim / register_env / register_robot ...):
 /// `kind` is one of sim, env, robot, controller, sensor, task, simulator; `section_yaml` is what a
