@@ -69,11 +69,11 @@ GYM_IDS: dict[str, tuple[str, dict]] = {
     # Rough: legged_gym's tiled terrain with its curriculum, and its ground-friction randomisation
     # (domain_rand.randomize_friction, friction_range [0.5, 1.25]).
     "Kestrel-Go2-Rough-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("go2"), "env": "legged_rough", "task": "locomotion_go2",
-                                                 "simulator": {"friction": [0.5, 1.25]}}),
+                                                 "simulator": {"name": "rigid", "friction": [0.5, 1.25]}}),
     "Kestrel-AnymalC-Flat-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("anymal_c"), "env": "legged_flat",
                                                     "task": "locomotion_anymal_c_flat"}),
     "Kestrel-AnymalC-Rough-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("anymal_c"), "env": "legged_rough",
-                                                     "task": "locomotion_anymal_c_rough", "simulator": {"friction": [0.5, 1.25]}}),
+                                                     "task": "locomotion_anymal_c_rough", "simulator": {"name": "rigid", "friction": [0.5, 1.25]}}),
 }
 
 

@@ -119,7 +119,7 @@ def test_domain_randomisation_views_and_push_links():
     # legged_gym's / LeggedGym-Ex's randomisation from the scenario's simulator section, as
     # zero-copy views drawn per robot at each reset.
     sim = legged("go2", envs=6, seed=4, simulator={
-        "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
+        "name": "rigid", "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
         "joint_armature_kg_m2": [0.005, 0.02], "max_push_force_N": 50.0})
     mu, e, dm, com, arm = (sim.dr_friction_values, sim.dr_restitution_values, sim.dr_added_base_mass,
                            sim.dr_base_com_bias, sim.dr_joint_armature)
@@ -133,16 +133,16 @@ def test_domain_randomisation_views_and_push_links():
     assert mu[2] != before[2] and mu[3] == before[3]  # redrawn for the reset env only, in place
     # push_links moves the robots against the same robots unpushed.
     ref = legged("go2", envs=6, seed=4, simulator={
-        "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
+        "name": "rigid", "friction": [0.5, 1.25], "restitution": [0.0, 0.5], "added_mass_kg": [-1.0, 3.0], "com_bias_max_m": 0.05,
         "joint_armature_kg_m2": [0.005, 0.02], "max_push_force_N": 50.0})
     ref.reset_idx([2])
     zero = np.zeros((6, 12), dtype=DT)
     sim.push_links()
     sim.step(zero)
     ref.step(zero)
-    assert np.abs(sim.base_lin_vel_w - ref.base_lin_vel_w).max() > 0.01
+    assert np.abs(sim.base_lin_vel_b - ref.base_lin_vel_b).max() > 0.01
     with pytest.raises(ValueError, match="simulator.restitution"):
-        legged("go2", envs=1, simulator={"restitution": [0.5, 0.2]})
+        legged("go2", envs=1, simulator={"name": "rigid", "restitution": [0.5, 0.2]})
     quad = kestrel.make_simulator({"env": "empty"}, num_envs=2)
     with pytest.raises(ValueError, match="articulated only"):
         quad.push_links()

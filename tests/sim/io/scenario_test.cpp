@@ -299,7 +299,9 @@ TEST(SimScenario, NestedTaskSectionsAreReachable) {
 
 TEST(SimScenario, EverySchemaRowIsReachableUnderItsOwnName) {
   every_row(sim_schema(), "base_sim", &WorldConfig::sim);
-  every_row(env_schema(), "empty", &WorldConfig::env);
+  // total_num_envs must cover first_env_index + num_envs (the whole run a slice belongs to).
+  every_row(env_schema(), "empty", &WorldConfig::env,
+            [](const std::string& key) { return key == "total_num_envs" ? std::string("num_envs: 1, ") : std::string(); });
   every_row(robot_schema(), "base_quadrotor", &WorldConfig::robot);
   every_row(task_schema(), "position_setpoint", &WorldConfig::task);
   every_row(simulator_schema(), "rigid", &WorldConfig::simulator);
