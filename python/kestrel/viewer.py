@@ -62,6 +62,11 @@ CONTACT_RGB = (255, 30, 30)
 # Sensor returns, one colour per range image k (cycled): cyan, yellow, purple.
 RAY_RGB = ((0, 200, 220), (230, 200, 0), (150, 60, 220))
 RAY_LINES_MAX = 48  # rays drawn as segments for the image robot (a few: thousands would hide the scene)
+# A depth camera alone is 32k returns a robot: the clouds are what a page can take at the run's rate
+# (every 1 / RAY_PERIOD_S s of wall time at most, RAY_POINTS_MAX points per environment and image,
+# every n-th return beyond that); a replay draws every frame it shows.
+RAY_PERIOD_S = 0.1
+RAY_POINTS_MAX = 30_000
 
 # kernel/status.hpp: non_finite_command, non_finite_state, motor_failure, non_finite_output.
 _ROTOR_ALARM = (1 << 0) | (1 << 1) | (1 << 6) | (1 << 8)
@@ -152,6 +157,7 @@ class Viewer:
         self._rays = [{**r, "dirs_s": np.asarray(r["dirs_s"], np.float64), "depth_scale": np.asarray(r["depth_scale"], np.float64)}
                       for r in scene_info.get("range_rays", [])]
         self._ray_points: dict[tuple[int, int], np.ndarray] = {}
+        self.ray_period_s, self._last_rays = RAY_PERIOD_S, -math.inf
         self.server.on_client_connect(self._on_connect)
         self.status = self.server.gui.add_markdown("**Kestrel** viewer")
 
@@ -346,8 +352,10 @@ class Viewer:
         """Each range image's returns as a point cloud per environment shown (every robot of it), and
         for the image robot up to RAY_LINES_MAX rays as segments from the sensor to its hit."""
         mp, mq = fr.robots.get("sensor_mount_pos_b"), fr.robots.get("sensor_mount_quat_bs")
-        if mp is None or mq is None:
+        now = time.monotonic()
+        if mp is None or mq is None or now - self._last_rays < self.ray_period_s:
             return
+        self._last_rays = now
         for k, rays in enumerate(self._rays):
             imgs = fr.images.get(f"range{k}")
             if imgs is None:
@@ -369,6 +377,8 @@ class Viewer:
                                                  thickness=1.5, thickness_units="screen")
             for e, chunks in per_env.items():
                 pts = np.concatenate(chunks) if chunks else np.zeros((0, 3))
+                if len(pts) > RAY_POINTS_MAX:
+                    pts = pts[:: -(-len(pts) // RAY_POINTS_MAX)]
                 self._ray_points[(e, k)] = pts
                 self.scene.add_point_cloud(f"/env{e}/rays{k}", points=pts.astype(np.float32),
                                            colors=np.tile(rgb, (len(pts), 1)), point_size=0.04, point_shape="circle")
@@ -670,6 +680,7 @@ class TrainView:
         spacing = max([float(hi[0] - lo[0]) for lo, hi in bounds] + [float(hi[1] - lo[1]) for lo, hi in bounds] + [4.0]) + 2.0
         self.viewer = Viewer(info, sim.robots_per_env, self.envs, host=host, port=port, env_spacing_m=spacing,
                              title="Kestrel training")
+        self.viewer.ray_period_s = 0.0  # this class paces the frames itself (fps)
         fr = self._frame()
         self.viewer.set_viewer_camera(*default_camera(info, fr, self.viewer.env_offset(self.envs[0])))
         self._draw(fr)
@@ -720,6 +731,7 @@ class ReplayView:
         if missing:
             raise ValueError(f"envs: {missing} not in the recording; it has envs {sc['envs']}")
         self.viewer = Viewer(sc["info"], sc["robots_per_env"], shown, host=host, port=port)
+        self.viewer.ray_period_s = 0.0  # the frame the slider names, clouds included
         gui = self.viewer.server.gui
         self.slider = gui.add_slider("Time step", min=0, max=len(rec.frames) - 1, step=1, initial_value=0)
         self.play = gui.add_checkbox("Play", initial_value=False)
