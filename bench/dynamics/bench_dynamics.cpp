@@ -25,6 +25,7 @@
 #include <string>
 
 #include "kestrel/dynamics/multibody.hpp"
+#include "kestrel/sim/progress.hpp"
 #include "quadruped_tree.hpp"
 
 #if defined(KESTREL_BENCH_WITH_PINOCCHIO)
@@ -42,6 +43,10 @@ using kestrel::real;
 using Clock = std::chrono::steady_clock;
 
 volatile double g_sink = 0;
+// The whole program's calls on one progress line (issue 15; a terminal only, off with --quiet):
+// the default run is several seconds of silent loops. Updated between reps, outside the timing.
+kestrel::sim::ProgressLine* g_progress = nullptr;
+double g_calls_done = 0;
 
 template <class F>
 double best_ns_per_call(F&& f, long calls, int reps) {
@@ -51,6 +56,8 @@ double best_ns_per_call(F&& f, long calls, int reps) {
     for (long i = 0; i < calls; ++i) f();
     const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / static_cast<double>(calls);
     best = std::min(best, ns);
+    g_calls_done += static_cast<double>(calls);
+    if (g_progress != nullptr) g_progress->update(g_calls_done);
   }
   return best;
 }
@@ -105,12 +112,14 @@ int main(int argc, char** argv) {
   long calls = 200000;
   int reps = 7;
   const char* csv = nullptr;
+  bool quiet = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--calls") && i + 1 < argc) calls = std::atol(argv[++i]);
+    if (!std::strcmp(argv[i], "--quiet")) quiet = true;
+    else if (!std::strcmp(argv[i], "--calls") && i + 1 < argc) calls = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
     else {
-      std::fprintf(stderr, "usage: kestrel_bench_dynamics [--calls N] [--reps R] [--csv PATH]\n");
+      std::fprintf(stderr, "usage: kestrel_bench_dynamics [--calls N] [--reps R] [--csv PATH] [--quiet]\n");
       return 2;
     }
   }
@@ -120,6 +129,15 @@ int main(int argc, char** argv) {
   }
   Row rows[6];
   int n_rows = 0;
+#if defined(KESTREL_BENCH_WITH_PINOCCHIO)
+  const int sides = 2;
+#else
+  const int sides = 1;
+#endif
+  // 2 bases x 3 algorithms x the sides, reps x calls each.
+  kestrel::sim::ProgressLine progress(stderr, kestrel::sim::ProgressLine::enabled_for(quiet),
+                                      6.0 * sides * static_cast<double>(reps) * static_cast<double>(calls), "calls");
+  g_progress = &progress;
   for (int fl = 0; fl < 2; ++fl) {
     const bool floating = fl == 1;
     static dy::MultibodyModel<13> m;
@@ -160,6 +178,8 @@ int main(int argc, char** argv) {
     rows[n_rows++] = {"rnea", base, k_rnea, p_rnea, d_rnea};
     rows[n_rows++] = {"crba", base, k_crba, p_crba, d_crba};
   }
+  progress.finish();
+  g_progress = nullptr;
   std::printf("quadruped tree (bench/dynamics/quadruped_tree.hpp), double, one thread, best of %d x %ld calls\n", reps, calls);
   std::printf("  %-5s %-15s %12s %14s %10s %14s\n", "algo", "base", "kestrel ns", "pinocchio ns", "ratio", "max |diff|");
   FILE* f = csv != nullptr ? std::fopen(csv, "w") : nullptr;

@@ -51,6 +51,7 @@
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/dynamics/multibody.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
+#include "kestrel/sim/progress.hpp"
 
 #ifndef KESTREL_BENCH_MODELS_DIR
 #define KESTREL_BENCH_MODELS_DIR "models"
@@ -330,6 +331,16 @@ std::string describe(const mjModel* m) {
   return buf;
 }
 
+// Physics steps of every side (settling and timed reps) on one progress line (issue 15; a terminal
+// only, off with --quiet): the default run is tens of seconds of silent loops. Updated between
+// loops, never inside a timed one.
+kestrel::sim::ProgressLine* g_progress = nullptr;
+double g_steps_done = 0;
+void progress_add(double n) {
+  g_steps_done += n;
+  if (g_progress != nullptr) g_progress->update(g_steps_done);
+}
+
 bool run_case(const Case& c, const std::string& models, long steps, int reps, Result& out) {
   const std::string path = models + "/" + c.file;
   out.robot = c.name;
@@ -375,6 +386,7 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     }
   }
   out.k.settle_drift = std::hypot(k.x() - kx0, k.y() - ky0);
+  progress_add(settle);
   for (int i = 0; i < kMujocoConfigs; ++i) {
     MujocoSide& mj = mjs[i];
     SimFigures& f = out.mj[i];
@@ -391,6 +403,7 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       }
     }
     f.settle_drift = std::hypot(mj.x() - x0, mj.y() - y0);
+    progress_add(settle);
   }
   if (k.overflow) {
     out.ok = false;
@@ -412,6 +425,7 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     for (long i = 0; i < steps; ++i) k_ok = (k.step() == kestrel::Status::ok) && k_ok;
     const double kns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / static_cast<double>(steps);
     out.k.ns = std::min(out.k.ns, kns);
+    progress_add(static_cast<double>(steps));
     g_sink = g_sink + k.z();
     if (r == 0) {
       out.k.rep_drift = std::hypot(k.x() - static_cast<double>(q_settled[0]), k.y() - static_cast<double>(q_settled[1]));
@@ -424,6 +438,7 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       for (long i = 0; i < steps; ++i) mj.step();
       const double mns = std::chrono::duration<double, std::nano>(Clock::now() - t1).count() / static_cast<double>(steps);
       out.mj[c2].ns = std::min(out.mj[c2].ns, mns);
+      progress_add(static_cast<double>(steps));
       g_sink = g_sink + mj.z();
       if (r == 0) {
         out.mj[c2].rep_drift = std::hypot(mj.x() - settled[c2]->qpos[0], mj.y() - settled[c2]->qpos[1]);
@@ -464,15 +479,17 @@ int main(int argc, char** argv) {
   const char* csv = nullptr;
   std::string models = KESTREL_BENCH_MODELS_DIR;
   std::string machine = "host";
+  bool quiet = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--steps") && i + 1 < argc) steps = std::atol(argv[++i]);
+    if (!std::strcmp(argv[i], "--quiet")) quiet = true;
+    else if (!std::strcmp(argv[i], "--steps") && i + 1 < argc) steps = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
     else if (!std::strcmp(argv[i], "--models") && i + 1 < argc) models = argv[++i];
     else if (!std::strcmp(argv[i], "--machine") && i + 1 < argc) machine = argv[++i];
     else {
       std::fprintf(stderr,
-                   "usage: kestrel_bench_legged_step [--steps N] [--reps R] [--csv PATH] [--models DIR] [--machine LABEL]\n");
+                   "usage: kestrel_bench_legged_step [--steps N] [--reps R] [--csv PATH] [--models DIR] [--machine LABEL] [--quiet]\n");
       return 2;
     }
   }
@@ -482,11 +499,18 @@ int main(int argc, char** argv) {
   }
   const Case cases[] = {{"go2", "go2/go2.xml", 20, 0.5}, {"anymal_c", "anymal_c/anymal_c.xml", 80, 2}};
   std::vector<Result> results;
+  const double settle_steps = std::round(kSettleS / kDt);
+  kestrel::sim::ProgressLine progress(stderr, kestrel::sim::ProgressLine::enabled_for(quiet),
+                                      static_cast<double>(sizeof cases / sizeof cases[0]) * (1 + kMujocoConfigs) * (settle_steps + static_cast<double>(reps) * static_cast<double>(steps)),
+                                      "steps");
+  g_progress = &progress;
   for (const Case& c : cases) {
     Result r;
     if (!run_case(c, models, steps, reps, r)) return 1;
     results.push_back(r);
   }
+  progress.finish();
+  g_progress = nullptr;
 
   char header[1400];
   std::snprintf(header, sizeof header,

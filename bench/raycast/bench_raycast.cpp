@@ -23,6 +23,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/kernel/rng.hpp"
 #include "kestrel/sensors/ray_sensor.hpp"
+#include "kestrel/sim/progress.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sensors;
@@ -97,9 +98,9 @@ struct Result {
 bool same_bits(real a, real b) { return std::memcmp(&a, &b, sizeof(real)) == 0; }
 
 // Packets of W rays (W = 4 or 8) along the table's row-major order, all lanes valid except at the end.
-template <int W, typename RayHitW, typename Fn>
+template <int W, typename RayHitW, typename Fn, typename After>
 double embree_packets(RTCScene es, const std::vector<real>& dirs, std::uint32_t n, const Mat3& R, const Vec3& o,
-                      real tfar, int reps, Fn&& intersect) {
+                      real tfar, int reps, Fn&& intersect, After&& after_rep) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   alignas(64) RayHitW rh;
@@ -129,6 +130,7 @@ double embree_packets(RTCScene es, const std::vector<real>& dirs, std::uint32_t 
       intersect(valid, es, &ctx, &rh);
     }
     te += seconds_since(t1);
+    after_rep();
   }
   return te / reps;
 }
@@ -136,10 +138,11 @@ double embree_packets(RTCScene es, const std::vector<real>& dirs, std::uint32_t 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool smoke = false;
+  bool smoke = false, quiet = false;
   const char* csv = nullptr;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--smoke") == 0) smoke = true;
+    else if (std::strcmp(argv[i], "--quiet") == 0) quiet = true;
     else if (std::strcmp(argv[i], "--csv") == 0 && i + 1 < argc) csv = argv[++i];
     else csv = argv[i];  // legacy: bare path
   }
@@ -267,6 +270,18 @@ int main(int argc, char** argv) {
   pose.orientation_ws = quat_from_euler_xyz(0, 0, 0.4_r);
   const Mat3 R = rotation_matrix(pose.orientation_ws);
 
+  // The rays cast below, both sensors, on one progress line (issue 15; a terminal only, off with
+  // --quiet): per sensor reps Kestrel renders, 1 raw pass, reps + 1 Embree passes, 4 identity
+  // passes, reps 4-wide and reps 8-wide packet passes. Updated between passes, outside the timing.
+  const double rays_per_sensor_pass = 4.0 * reps + 6.0;
+  kestrel::sim::ProgressLine progress(
+      stderr, kestrel::sim::ProgressLine::enabled_for(quiet),
+      rays_per_sensor_pass * (static_cast<double>(lp.height) * lp.width + static_cast<double>(cp.height) * cp.width), "rays");
+  double rays_done = 0;
+  auto progress_add = [&](double rays) {
+    rays_done += rays;
+    progress.update(rays_done);
+  };
   Result results[2];
   for (int s = 0; s < 2; ++s) {
     RayTable table{dirs.data(), scale.data(), nmax, 0, 0};
@@ -277,10 +292,14 @@ int main(int argc, char** argv) {
     SensorOutput out;
     out.range = range.data();
     // Kestrel: range mode so both engines report the same quantity.
-    auto t0 = Clock::now();
-    for (int r = 0; r < reps; ++r)
+    double tk = 0;
+    for (int r = 0; r < reps; ++r) {
+      const auto t0 = Clock::now();
       if (render(scene, pose, table, op, false, out) != Status::ok) return 4;
-    const double tk = seconds_since(t0) / reps;
+      tk += seconds_since(t0);
+      progress_add(n);  // between reps, outside the timing
+    }
+    tk /= reps;
     // Raw Kestrel distances (no post-processing) for the comparison.
     for (std::uint32_t i = 0; i < n; ++i) {
       const Vec3 d = R * Vec3(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2]);
@@ -316,8 +335,10 @@ int main(int argc, char** argv) {
         }
       }
       if (r < reps) te += seconds_since(t1);
+      progress_add(n);
     }
     te /= reps;
+    progress_add(n);  // the raw pass
     // Identity: the tiled render (all outputs) against single-ray Scene::intersect, both modes.
     long diffs = 0;
     for (int mode = 0; mode < 2; ++mode) {
@@ -346,19 +367,23 @@ int main(int argc, char** argv) {
         if (!same) ++diffs;
       }
     }
+    progress_add(4.0 * n);
     const real tf = op.max_range;
     const double te4 = embree_packets<4, RTCRayHit4>(es, dirs, n, R, pose.position_w, tf, reps,
                                                       [](const int* v, RTCScene sc, RTCIntersectContext* c, RTCRayHit4* h) {
                                                         rtcIntersect4(v, sc, c, h);
-                                                      });
+                                                      },
+                                                      [&] { progress_add(n); });
     const double te8 = embree_packets<8, RTCRayHit8>(es, dirs, n, R, pose.position_w, tf, reps,
                                                       [](const int* v, RTCScene sc, RTCIntersectContext* c, RTCRayHit8* h) {
                                                         rtcIntersect8(v, sc, c, h);
-                                                      });
+                                                      },
+                                                      [&] { progress_add(n); });
     results[s] = Result{is_cam ? "camera_135x240" : "lidar_64x512", n, n / tk * 1e-6, n / te * 1e-6, n / te4 * 1e-6,
                         n / te8 * 1e-6, mismatches, diffs};
   }
 
+  progress.finish();
   std::printf("scene: %zu boxes, %zu capsule trunks, %u mesh triangles (%u objects)\n", f.box_pos.size(), f.trunk_pos.size(),
               ntri, nobj);
   std::printf("build: kestrel mesh %.3f ms + instances %.3f ms = %.3f ms; embree (threads=1) %.3f ms; ratio embree/kestrel %.2f\n",

@@ -15,7 +15,7 @@
 // repetition. Timings are printed and optionally written as CSV; nothing is asserted (the smoke
 // test only checks the exit code).
 //
-// Usage: kestrel_bench_sim [--quick] [--csv PATH] [--reps N]
+// Usage: kestrel_bench_sim [--quick] [--csv PATH] [--reps N] [--quiet]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -29,6 +29,7 @@
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/batch_step.hpp"
+#include "kestrel/sim/progress.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/world.hpp"
 
@@ -63,6 +64,7 @@ double median(std::vector<double> v) {
 
 struct Options {
   bool quick = false;
+  bool quiet = false;  // --quiet: no progress line (it is off anyway unless stderr is a terminal)
   int reps = 5;
   double env_steps_per_rep = 4e6;
   std::string csv;
@@ -111,13 +113,19 @@ double time_world(const Options& o, const char* env, int envs, int threads, bool
   }
   w->set_batched(batched);
   const int k = std::max(1, static_cast<int>(o.env_steps_per_rep / envs));
-  w->step(std::max(1, k / 4));  // warm-up: caches, page faults, branch predictors
+  const int warm = std::max(1, k / 4);
+  // This case's progress (issue 15): one case is up to tens of seconds of silence (1 env: 21M
+  // env-steps at ~1 us). Updated between reps, outside the timing; erased before its row prints.
+  ProgressLine progress(stderr, ProgressLine::enabled_for(o.quiet), (static_cast<double>(warm) + o.reps * static_cast<double>(k)) * envs);
+  w->step(warm);  // warm-up: caches, page faults, branch predictors
   std::vector<double> rates;
   for (int r = 0; r < o.reps; ++r) {
+    progress.update((warm + static_cast<double>(r) * k) * envs);
     const auto t0 = Clock::now();
     w->step(k);
     rates.push_back(static_cast<double>(k) * envs / seconds_since(t0));
   }
+  progress.clear();
   return median(rates);
 }
 
@@ -381,15 +389,19 @@ double time_mujoco(const Options& o, int n, bool physics_only) {
     mj_step(m, di);
   };
   const int k = std::max(1, static_cast<int>(o.env_steps_per_rep / 8 / n));
-  for (int j = 0; j < std::max(1, k / 4); ++j)
+  const int warm = std::max(1, k / 4);
+  ProgressLine progress(stderr, ProgressLine::enabled_for(o.quiet), (static_cast<double>(warm) + o.reps * static_cast<double>(k)) * n);
+  for (int j = 0; j < warm; ++j)
     for (int i = 0; i < n; ++i) one(i);
   std::vector<double> rates;
   for (int rep = 0; rep < o.reps; ++rep) {
+    progress.update((warm + static_cast<double>(rep) * k) * n);
     const auto t0 = Clock::now();
     for (int j = 0; j < k; ++j)
       for (int i = 0; i < n; ++i) one(i);
     rates.push_back(static_cast<double>(k) * n / seconds_since(t0));
   }
+  progress.clear();
   // Sanity: the controlled quads should be near their setpoints (same controller, same dt).
   double dist = 0;
   if (!physics_only) {
@@ -426,10 +438,11 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") o.quick = true;
+    else if (a == "--quiet") o.quiet = true;
     else if (a == "--csv" && i + 1 < argc) o.csv = argv[++i];
     else if (a == "--reps" && i + 1 < argc) o.reps = std::max(1, std::atoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: kestrel_bench_sim [--quick] [--csv PATH] [--reps N]\n");
+      std::fprintf(stderr, "usage: kestrel_bench_sim [--quick] [--csv PATH] [--reps N] [--quiet]\n");
       return 2;
     }
   }

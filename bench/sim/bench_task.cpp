@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "kestrel/kernel/rng.hpp"
+#include "kestrel/sim/progress.hpp"
 #include "kestrel/sim/scenario.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/task.hpp"
@@ -30,7 +31,7 @@ struct Case {
   int steps;
 };
 
-double run_case(const Case& c, int threads, int reps, bool quick) {
+double run_case(const Case& c, int threads, int reps, bool quick, bool quiet) {
   WorldConfig cfg;
   std::string err;
   std::string yaml = std::string("task: ") + c.task + "\n";
@@ -52,27 +53,32 @@ double run_case(const Case& c, int threads, int reps, bool quick) {
   RngStream rng(1, 0, kPurposeUser);
   for (float& x : a) x = static_cast<float>(rng.uniform(-0.5_r, 0.5_r));
   double best = 1e30;
+  // This case's progress (issue 15), between reps and outside the timing; erased before its row.
+  ProgressLine progress(stderr, ProgressLine::enabled_for(quiet), static_cast<double>(reps) * steps * t->num_envs());
   for (int r = 0; r < reps; ++r) {
+    progress.update(static_cast<double>(r) * steps * t->num_envs());
     const auto t0 = std::chrono::steady_clock::now();
     for (int s = 0; s < steps; ++s) t->step(a.data());
     const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
     best = std::min(best, ns / (static_cast<double>(steps) * t->num_envs()));
   }
+  progress.clear();
   return best;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false;
+  bool quick = false, quiet = false;
   int reps = 3;
   const char* only = nullptr;  // run the cases whose "task,controller,backend" contains this
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) quick = true;
+    else if (std::strcmp(argv[i], "--quiet") == 0) quiet = true;
     else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = std::max(1, std::atoi(argv[++i]));
     else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: kestrel_bench_task [--quick] [--reps N] [--only SUBSTRING]\n");
+      std::fprintf(stderr, "usage: kestrel_bench_task [--quick] [--reps N] [--only SUBSTRING] [--quiet]\n");
       return 2;
     }
   }
@@ -89,7 +95,7 @@ int main(int argc, char** argv) {
     for (int threads : {1, 2}) {
       const std::string id = std::string(c.task) + "," + c.controller + "," + backend_name(c.backend);
       if (only != nullptr && id.find(only) == std::string::npos) continue;
-      const double ns = run_case(c, threads, quick ? 1 : reps, quick);
+      const double ns = run_case(c, threads, quick ? 1 : reps, quick, quiet);
       if (ns < 0) return 1;
       std::printf("%s,%s,%s,%d,%d,%.1f\n", c.task, c.controller, backend_name(c.backend), quick ? 8 : c.envs, threads, ns);
       std::fflush(stdout);

@@ -1,4 +1,5 @@
-"""A periodic progress line for long Python work (benchmarks; issue 15), the twin of `kestrel run`'s:
+"""A periodic progress line for long Python work (benchmarks, `kestrel run --record / --view`, teleop
+recordings; issue 15), the twin of `kestrel run`'s (sim/include/kestrel/sim/progress.hpp):
 
     with Progress(total=4 * 3 * 100 * 4096, unit="env-steps", desc="legged throughput") as p:
         ...; p.update(n)
@@ -21,8 +22,11 @@ def _si(v: float) -> str:
     return f"{v / 1e9:.2f}G"
 
 
-def format_line(desc: str, done: float, total: float, unit: str, elapsed_s: float) -> str:
+def format_line(desc: str, done: float, total: float | None, unit: str, elapsed_s: float) -> str:
     rate = done / elapsed_s if elapsed_s > 0 else 0.0
+    if total is None:
+        # Open-ended work (teleoperation until Ctrl-C): what is done, the rate and the time so far.
+        return f"  {desc}: {_si(done)} {unit}, {_si(rate)} {unit}/s, {elapsed_s:.1f} s"
     left = "? s left"
     if rate > 0:
         s = (total - done) / rate
@@ -34,12 +38,13 @@ def format_line(desc: str, done: float, total: float, unit: str, elapsed_s: floa
 class Progress:
     FIRST_AFTER_S, INTERVAL_S = 0.5, 0.25
 
-    def __init__(self, total: float, unit: str = "steps", desc: str = "", quiet: bool = False, stream=None,
+    def __init__(self, total: float | None, unit: str = "steps", desc: str = "", quiet: bool = False, stream=None,
                  clock=time.perf_counter):
+        """total None: open-ended (no percentage or time left), e.g. a teleoperated recording."""
         self.stream = sys.stderr if stream is None else stream
         isatty = getattr(self.stream, "isatty", None)
-        self.enabled = not quiet and total > 0 and callable(isatty) and bool(isatty())
-        self.total, self.unit, self.desc, self.clock = float(total), unit, desc, clock
+        self.enabled = not quiet and (total is None or total > 0) and callable(isatty) and bool(isatty())
+        self.total, self.unit, self.desc, self.clock = (None if total is None else float(total)), unit, desc, clock
         self.done, self.lines, self._last = 0.0, 0, None
         self._t0 = clock()
 

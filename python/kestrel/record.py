@@ -12,7 +12,8 @@ The recording (MCAP, JSON-encoded messages with JSON-schema channels):
 
     /kestrel/scene          kestrel.Scene, once: robot geometry, terrain, envs recorded, dt
     /kestrel/state          kestrel.State, every env-step: per robot pos, quat (xyzw), velocities,
-                            target, actions, motor thrusts, fault bits, crashed, feet, contacts
+                            target, actions, motor thrusts, fault bits, crashed, feet, contacts,
+                            sensor mounts (with the scene's range_rays: the point clouds)
     /kestrel/obstacles      kestrel.Obstacles, at the first step and whenever an env's layout changes
     /tf                     foxglove.FrameTransforms, every env-step: world -> env<e>/robot<r>
     /markers/obstacles      foxglove.SceneUpdate: env 0's obstacles as cubes, spheres, cylinders
@@ -109,6 +110,13 @@ def capture_frame(sim: _core.Simulator, envs: list[int], step: int, time_s: floa
             im[f"range{k}"] = np.array(sim.range_images(k)[rows], dtype=np.float32)
             if rigid:
                 im[f"segmentation{k}"] = np.array(sim.segmentation_images(k)[rows], dtype=np.int32)
+        if rigid and sim.num_range_images > 0:
+            # Each robot's sensor mounts (redrawn at resets when randomised): with the rays of
+            # sensor_rays() and the robot's pose they turn a range image into world points, live
+            # and in a replay (range_points_w).
+            mounts = [sim.sensor_mounts(k) for k in range(sim.num_range_images)]
+            r["sensor_mount_pos_b"] = np.stack([np.asarray(p)[rows] for p, _ in mounts], axis=1)
+            r["sensor_mount_quat_bs"] = np.stack([np.asarray(q)[rows] for _, q in mounts], axis=1)
     return Frame(step=step, time_s=time_s, envs=list(envs), robots=r, obstacles=obs, images=im)
 
 
@@ -117,6 +125,50 @@ def obstacles_equal(a: dict[str, Any] | None, b: dict[str, Any] | None) -> bool:
         return a is b
     keys = ("type", "radius_m", "half_length_m", "half_extents_m", "position_w", "orientation_xyzw")
     return all(np.array_equal(a[k], b[k]) for k in keys)
+
+
+def sensor_rays(sim: _core.Simulator) -> list[dict[str, Any]]:
+    """Every range image's rays (Simulator.range_image_rays), float32 directions: what turns pixels
+    into points. Empty where the simulator has no ray sensors or no ray table (planar)."""
+    out = []
+    try:
+        for k in range(sim.num_range_images):
+            r = dict(sim.range_image_rays(k))
+            r["dirs_s"] = np.asarray(r["dirs_s"], dtype=np.float32)
+            r["depth_scale"] = np.asarray(r["depth_scale"], dtype=np.float32)
+            out.append(r)
+    except ValueError:
+        return []
+    return out
+
+
+def _rotate_many(q_xyzw: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """v (..., 3) rotated by unit quaternions q (..., 4), xyzw, broadcast."""
+    u, w = q_xyzw[..., :3], q_xyzw[..., 3:4]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def range_points_w(rays: dict[str, Any], image: np.ndarray, pos_w, quat_xyzw, mount_pos_b, mount_quat_bs) -> np.ndarray:
+    """The world points of one robot's range image: (n, 3) for the pixels with a return, in image
+    order. rays: one entry of sensor_rays(); image: (H, W) as range_images(k)[robot]; the robot's
+    pose and that sensor's mount (Simulator.sensor_mounts). A pixel v returns when
+    min_range_m <= v * value_scale_m < max_range_m (the no-return values are negative or the far
+    value, max_range_m); its range along the ray is v * value_scale_m / depth_scale."""
+    v = np.asarray(image, dtype=np.float64).reshape(-1) * float(rays["value_scale_m"])
+    ok = np.isfinite(v) & (v >= float(rays["min_range_m"])) & (v < float(rays["max_range_m"]))
+    d = np.asarray(rays["dirs_s"], dtype=np.float64).reshape(-1, 3)[ok]
+    rng = v[ok] / np.asarray(rays["depth_scale"], dtype=np.float64).reshape(-1)[ok]
+    p_s = d * rng[:, None]
+    q_wb = np.asarray(quat_xyzw, dtype=np.float64)
+    p_b = np.asarray(mount_pos_b, dtype=np.float64) + _rotate_many(np.asarray(mount_quat_bs, dtype=np.float64), p_s)
+    return np.asarray(pos_w, dtype=np.float64) + _rotate_many(q_wb, p_b)
+
+
+def sensor_origin_w(pos_w, quat_xyzw, mount_pos_b) -> np.ndarray:
+    """Where a sensor sits in the world: p_wb + R_wb mount_pos_b."""
+    return np.asarray(pos_w, dtype=np.float64) + _rotate_many(np.asarray(quat_xyzw, dtype=np.float64),
+                                                              np.asarray(mount_pos_b, dtype=np.float64))
 
 
 # ---- the run `kestrel run` does, from Python ---------------------------------------------------------
@@ -216,7 +268,8 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     "kestrel.State": _obj({"timestamp": _TIME, "step": _INT, "time_s": _NUM, "envs": _ARR,
                            **{k: _ARR for k in ("pos_w", "quat_xyzw", "lin_vel_b", "ang_vel_b", "target_w", "actions",
                                                 "thrust_N", "faults", "fault_names", "crashed", "contact_forces_w",
-                                                "feet_pos_w", "link_contact_forces_w", "dof_pos", "measured_heights")}},
+                                                "feet_pos_w", "link_contact_forces_w", "dof_pos", "measured_heights",
+                                                "sensor_mount_pos_b", "sensor_mount_quat_bs")}},
                           "kestrel.State"),
     "kestrel.Obstacles": _obj({"timestamp": _TIME, "step": _INT, "env": _INT,
                                **{k: _ARR for k in ("type", "radius_m", "half_length_m", "half_extents_m", "position_w",
@@ -270,6 +323,8 @@ class McapRecorder:
         self._seq = 0
         self._last_obstacles: dict[int, dict[str, Any]] = {}
         info = sim.scene_info()
+        # The rays once (the mounts go with every state): a replay redraws the point clouds from them.
+        info["range_rays"] = sensor_rays(sim)
         self.robots_per_env = sim.robots_per_env
         self._write("/kestrel/scene", "kestrel.Scene", 0, {
             "version": _SCHEMA_VERSION, "scenario": scenario, "robot_name": info["robot_name"],
@@ -480,7 +535,12 @@ def run_main(argv: list[str], prog: str = "kestrel run") -> int:
 
         viewer = LiveView(run, envs=list(range(min(max(1, a.view_envs), sim.num_envs))), port=a.port, rate=a.rate)
         print(f"kestrel run: viewer at {viewer.url}")
-    print(f"kestrel run: {label} (from Python: {run.mode}, {sim.num_envs} envs, seed {cfg.seed}, steps {a.steps})")
+    print(f"kestrel run: {label} (from Python: {run.mode}, {sim.num_envs} envs, seed {cfg.seed}, steps {a.steps})", flush=True)
+    from .progress import Progress
+
+    # The C++ run's progress line, here too (a terminal only, off with --quiet): a recording with
+    # images or a real-time view runs for minutes.
+    progress = Progress(total=a.steps * sim.num_envs, unit="env-steps", desc="run", quiet=a.quiet)
     try:
         if recorder is not None:
             recorder.write(run.frame(rec_envs, images=not a.no_images))
@@ -491,7 +551,10 @@ def run_main(argv: list[str], prog: str = "kestrel run") -> int:
                 run.step()
             if recorder is not None:
                 recorder.write(run.frame(rec_envs, images=not a.no_images))
+            progress.update(sim.num_envs)
+        progress.close()
     finally:
+        progress.close()
         if recorder is not None:
             recorder.close()
             print(f"  wrote {a.record} ({len(rec_envs)} envs x {a.steps + 1} frames; MCAP, opens in Foxglove)")

@@ -22,7 +22,9 @@ its own under DIR/sb3/) and the final policy as DIR/policy.onnx and DIR/policy.h
 the deterministic action the env takes, scaled; summary.json's "export" gives its agreement with
 the learner's own policy). With --target-success the run stops at the first evaluation that
 reaches it. Times: `train_s` is the wall time spent in the learner and the simulator (evaluations
-excluded), `sim_s` the part of it in env.step.
+excluded), `sim_s` the part of it in env.step. `--view` shows the first --view-envs training
+environments in the 3-D viewer (kestrel.viewer.TrainView, at most --view-fps frames a second, the
+drawing outside sim_s; summary.json's "view" gives the frames drawn and the time they took).
 """
 
 from __future__ import annotations
@@ -504,6 +506,12 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                         "HOST:6379, or local (a Ray on this machine); the learner stays in this process")
     p.add_argument("--rollout-workers", type=int, default=None,
                    help="Ray actors holding the environments (each a slice, --threads threads each; default 2 with --address)")
+    p.add_argument("--view", action="store_true",
+                   help="show the first training environments in the 3-D viewer (a browser page) as they learn")
+    p.add_argument("--view-envs", type=int, default=4, metavar="N", help="--view: environments shown (default 4)")
+    p.add_argument("--view-fps", type=float, default=10.0,
+                   help="--view: frames drawn per second of wall time at most (default 10; drawing costs the learner time)")
+    p.add_argument("--port", type=int, default=8080, help="--view: the viewer's port (default 8080; 0: any free port)")
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
     legged = GYM_IDS.get(args.task, (args.task,))[0] == "locomotion_task"
@@ -566,6 +574,16 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                                    "decrease_step": 0}
         eval_overrides["task"] = task_over
     timer = _Timer(env)
+    view = None
+    if args.view:
+        from .viewer import TrainView
+
+        try:
+            # Wraps env.step after the timer: the drawing is not counted as simulator time.
+            view = TrainView(env, view_envs=args.view_envs, port=args.port, fps=args.view_fps)
+        except ValueError as e:
+            raise SystemExit(f"kestrel train: {e}")
+        print(f"kestrel train: viewer at {view.url} (envs {view.envs})", flush=True)
     learner = Learner(args, env)
     rows: list[dict] = []
     t_train = 0.0
@@ -659,6 +677,11 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     exported = _export(learner, args, overrides) if args.export else None
     if writer is not None:
         writer.close()
+    view_summary = None
+    if view is not None:
+        view_summary = {"url": view.url, "envs": view.envs, "env_step_calls": view.steps, "frames_drawn": view.frames_drawn,
+                        "draw_s": round(view.draw_s, 3)}
+        view.close()
     plot(rows, os.path.join(args.out, "curves.png"),
          f"{args.task} ({env.task.controller}), {args.learner}, {args.envs} envs, seed {args.seed}", args.target_success)
     summary = {"task": args.task, "controller": env.task.controller, "learner": args.learner, "envs": args.envs,
@@ -671,7 +694,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
                "final_eval": final_eval, "hidden": list(args.hidden),
-               "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count()}
+               "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count(),
+               "view": view_summary}
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=2)
     if not args.quiet:

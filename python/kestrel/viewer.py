@@ -2,8 +2,9 @@
 
     kestrel view [SCENARIO] [--envs N] [--view-envs N] [--port 8080]   # live: the scripted run, as `kestrel run`
     kestrel view --replay run.mcap                                     # a recording, with a time slider
-    kestrel teleop [SCENARIO]                                          # live, robot 0 of env 0 on the keyboard / mouse
+    kestrel teleop [SCENARIO] [--record run.mcap]                      # live, robot 0 of env 0 on the keyboard / mouse
     kestrel run SCENARIO --view [--record run.mcap]
+    kestrel train TASK --view [--view-envs 4] [--port 8080]            # the first training envs as they learn
 
 then open http://127.0.0.1:8080 in a browser. From Python:
 
@@ -25,8 +26,10 @@ What is drawn, per environment shown (environments side by side on a grid, `env_
 apart): the robots with their body frames (multirotor: body, arms and rotor discs, a rotor
 turns red when its motor has a fault bit; legged: base, feet and legs as lines; ground vehicle:
 a box), the targets / setpoints (green spheres), the obstacles as their collision shapes (convex
-hulls as their bounding boxes), the terrain (height field as a mesh; a plane as a grid), and
-beside the scene each sensor image of the selected robot (depth in grey, segmentation in colour).
+hulls as their bounding boxes), the terrain (height field as a mesh; a plane as a grid), the ray
+sensors' returns (lidar, ToF, depth camera) as point clouds in the world, with a few of the
+selected robot's rays as segments, and beside the scene each sensor image of the selected robot
+(depth in grey, segmentation in colour).
 draw_debug_vis draws LeggedGym-Ex's debug visuals: the height samples (measured_heights) as
 points, contacts as points and their forces as line segments (1 mm per newton).
 
@@ -45,7 +48,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .record import Frame, Recording, ScriptedRun, capture_frame, fault_names, load_run_config, obstacles_equal, read_recording
+from .record import (Frame, Recording, ScriptedRun, capture_frame, fault_names, load_run_config, obstacles_equal,
+                     range_points_w, read_recording, sensor_origin_w, sensor_rays)
 
 ROBOT_RGB = (255, 110, 0)      # orange body
 ROTOR_RGB = (60, 60, 60)
@@ -55,6 +59,14 @@ TARGET_RGB = (30, 190, 60)     # green
 TERRAIN_RGB = (170, 160, 140)
 HEIGHT_SAMPLE_RGB = (255, 0, 200)
 CONTACT_RGB = (255, 30, 30)
+# Sensor returns, one colour per range image k (cycled): cyan, yellow, purple.
+RAY_RGB = ((0, 200, 220), (230, 200, 0), (150, 60, 220))
+RAY_LINES_MAX = 48  # rays drawn as segments for the image robot (a few: thousands would hide the scene)
+# A depth camera alone is 32k returns a robot: the clouds are what a page can take at the run's rate
+# (every 1 / RAY_PERIOD_S s of wall time at most, RAY_POINTS_MAX points per environment and image,
+# every n-th return beyond that); a replay draws every frame it shows.
+RAY_PERIOD_S = 0.1
+RAY_POINTS_MAX = 30_000
 
 # kernel/status.hpp: non_finite_command, non_finite_state, motor_failure, non_finite_output.
 _ROTOR_ALARM = (1 << 0) | (1 << 1) | (1 << 6) | (1 << 8)
@@ -141,6 +153,11 @@ class Viewer:
         self._camera: tuple[np.ndarray, np.ndarray] | None = None
         self._lock = threading.RLock()
         self.image_robot = 0
+        # Per range image k: its rays (sensor_rays: scene_info's "range_rays", live or from a recording).
+        self._rays = [{**r, "dirs_s": np.asarray(r["dirs_s"], np.float64), "depth_scale": np.asarray(r["depth_scale"], np.float64)}
+                      for r in scene_info.get("range_rays", [])]
+        self._ray_points: dict[tuple[int, int], np.ndarray] = {}
+        self.ray_period_s, self._last_rays = RAY_PERIOD_S, -math.inf
         self.server.on_client_connect(self._on_connect)
         self.status = self.server.gui.add_markdown("**Kestrel** viewer")
 
@@ -330,6 +347,47 @@ class Viewer:
             else:
                 self._images[name].image = rgb
 
+    # ---- sensor returns ------------------------------------------------------------------------
+    def _draw_rays(self, fr: Frame) -> None:
+        """Each range image's returns as a point cloud per environment shown (every robot of it), and
+        for the image robot up to RAY_LINES_MAX rays as segments from the sensor to its hit."""
+        mp, mq = fr.robots.get("sensor_mount_pos_b"), fr.robots.get("sensor_mount_quat_bs")
+        now = time.monotonic()
+        if mp is None or mq is None or now - self._last_rays < self.ray_period_s:
+            return
+        self._last_rays = now
+        for k, rays in enumerate(self._rays):
+            imgs = fr.images.get(f"range{k}")
+            if imgs is None:
+                continue
+            rgb = np.array(RAY_RGB[k % len(RAY_RGB)], np.uint8)
+            per_env: dict[int, list[np.ndarray]] = {}
+            for i in range(len(fr.robots["pos_w"])):
+                e = fr.envs[i // self.rpe]
+                if e not in self.envs:
+                    continue
+                pos, q = fr.robots["pos_w"][i], fr.robots["quat_xyzw"][i]
+                pts = range_points_w(rays, imgs[i], pos, q, mp[i][k], mq[i][k]) + self.env_offset(e)
+                per_env.setdefault(e, []).append(pts)
+                if i == self.image_robot:
+                    o = sensor_origin_w(pos, q, mp[i][k]) + self.env_offset(e)
+                    pick = pts[np.linspace(0, len(pts) - 1, min(RAY_LINES_MAX, len(pts))).astype(int)] if len(pts) else pts
+                    segs = np.stack([np.repeat(o[None], len(pick), 0), pick], axis=1) if len(pick) else np.zeros((0, 2, 3))
+                    self.scene.add_line_segments(f"/env{e}/rays{k}_lines", points=segs.astype(np.float32), colors=rgb,
+                                                 thickness=1.5, thickness_units="screen")
+            for e, chunks in per_env.items():
+                pts = np.concatenate(chunks) if chunks else np.zeros((0, 3))
+                if len(pts) > RAY_POINTS_MAX:
+                    pts = pts[:: -(-len(pts) // RAY_POINTS_MAX)]
+                self._ray_points[(e, k)] = pts
+                self.scene.add_point_cloud(f"/env{e}/rays{k}", points=pts.astype(np.float32),
+                                           colors=np.tile(rgb, (len(pts), 1)), point_size=0.04, point_shape="circle")
+
+    def ray_points(self, env: int, k: int = 0) -> np.ndarray:
+        """The points last sent for range image k of environment env (world frame plus the env's
+        drawing offset, env_offset(env)), every robot of the env: (n, 3); empty if none drawn."""
+        return self._ray_points.get((env, k), np.zeros((0, 3))).copy()
+
     # ---- debug drawing ---------------------------------------------------------------------------
     def draw_debug_vis(self, height_samples: bool = True, contacts: bool = True) -> None:
         """LeggedGym-Ex's draw_debug_vis: from now on, each drawn frame also shows the height
@@ -392,6 +450,7 @@ class Viewer:
             self._draw_robots(fr)
             self._draw_obstacles(fr)
             self._draw_images(fr)
+            self._draw_rays(fr)
             if self._debug_heights or self._debug_contacts:
                 self._draw_debug(fr)
             faults = fr.robots.get("faults")
@@ -518,7 +577,9 @@ class LiveView:
         self.teleop = Teleop(run, row=self.envs[0] * sim.robots_per_env) if teleop else None
         bounds = [sim.env_bounds(e) for e in self.envs] if sim.backend == "rigid" else []
         spacing = max([float(hi[0] - lo[0]) for lo, hi in bounds] + [float(hi[1] - lo[1]) for lo, hi in bounds] + [4.0]) + 2.0
-        self.viewer = Viewer(sim.scene_info(), sim.robots_per_env, self.envs, host=host, port=port, env_spacing_m=spacing)
+        info = sim.scene_info()
+        info["range_rays"] = sensor_rays(sim)
+        self.viewer = Viewer(info, sim.robots_per_env, self.envs, host=host, port=port, env_spacing_m=spacing)
         self.rate = float(rate) if rate else 1.0 / max(run.env_step_s, 1e-6)
         if not self.rate > 0:
             raise ValueError(f"rate: expected env-steps per second > 0, got {rate}")
@@ -588,6 +649,73 @@ class LiveView:
         self.viewer.close()
 
 
+# ---- training -----------------------------------------------------------------------------------------
+
+class TrainView:
+    """`kestrel train --view`: the first environments of a training vector env in a Viewer, drawn
+    from inside env.step at most `fps` times a second of wall time (and at most every `every`
+    env-steps), so the learner runs at nearly its own pace: a frame copies only the shown
+    environments' rows (capture_frame) and viser sends only what changed. The sensor images and
+    point clouds come with the frame when the task renders any (images=True)."""
+
+    def __init__(self, env, view_envs: int = 4, port: int = 8080, host: str = "127.0.0.1", fps: float = 10.0,
+                 every: int = 1, images: bool = True):
+        task = getattr(env, "task", None)
+        sim = getattr(task, "simulator", None) if task is not None else None
+        if sim is None:
+            raise ValueError("--view: the environments are not in this process (a Ray rollout env); "
+                             "view one of its scenarios with `kestrel view` instead")
+        if not fps > 0 or int(every) < 1:
+            raise ValueError(f"--view-fps: expected > 0, got {fps}; --view-every: expected >= 1, got {every}")
+        self.env, self.sim = env, sim
+        self.envs = list(range(min(max(1, int(view_envs)), sim.num_envs)))
+        self.min_period_s, self.every, self.images = 1.0 / float(fps), int(every), images
+        self.env_step_s = sim.dt_s * sim.decimation
+        self.steps = 0           # env.step calls seen
+        self.frames_drawn = 0
+        self.draw_s = 0.0        # wall time spent drawing (what the viewer costs the training)
+        info = sim.scene_info()
+        info["range_rays"] = sensor_rays(sim)
+        bounds = [sim.env_bounds(e) for e in self.envs] if sim.backend == "rigid" else []
+        spacing = max([float(hi[0] - lo[0]) for lo, hi in bounds] + [float(hi[1] - lo[1]) for lo, hi in bounds] + [4.0]) + 2.0
+        self.viewer = Viewer(info, sim.robots_per_env, self.envs, host=host, port=port, env_spacing_m=spacing,
+                             title="Kestrel training")
+        self.viewer.ray_period_s = 0.0  # this class paces the frames itself (fps)
+        fr = self._frame()
+        self.viewer.set_viewer_camera(*default_camera(info, fr, self.viewer.env_offset(self.envs[0])))
+        self._draw(fr)
+        self._last_draw = time.monotonic()
+        self._last_step = 0
+        inner = env.step
+
+        def step_and_draw(actions):
+            out = inner(actions)
+            self.steps += 1
+            now = time.monotonic()
+            if self.steps - self._last_step >= self.every and now - self._last_draw >= self.min_period_s:
+                self._last_step, self._last_draw = self.steps, now
+                self._draw(self._frame())
+            return out
+
+        env.step = step_and_draw  # the learner's adapters call env.step: every rollout step passes here
+
+    @property
+    def url(self) -> str:
+        return self.viewer.url
+
+    def _frame(self) -> Frame:
+        return capture_frame(self.sim, self.envs, self.steps, self.steps * self.env_step_s, images=self.images)
+
+    def _draw(self, fr: Frame) -> None:
+        t0 = time.perf_counter()
+        self.viewer.draw(fr)
+        self.frames_drawn += 1
+        self.draw_s += time.perf_counter() - t0
+
+    def close(self) -> None:
+        self.viewer.close()
+
+
 # ---- replay -------------------------------------------------------------------------------------------
 
 class ReplayView:
@@ -603,6 +731,7 @@ class ReplayView:
         if missing:
             raise ValueError(f"envs: {missing} not in the recording; it has envs {sc['envs']}")
         self.viewer = Viewer(sc["info"], sc["robots_per_env"], shown, host=host, port=port)
+        self.viewer.ray_period_s = 0.0  # the frame the slider names, clouds included
         gui = self.viewer.server.gui
         self.slider = gui.add_slider("Time step", min=0, max=len(rec.frames) - 1, step=1, initial_value=0)
         self.play = gui.add_checkbox("Play", initial_value=False)
@@ -655,6 +784,11 @@ def view_parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument("--screenshot", metavar="PNG", default=None,
                    help="after --steps env-steps, save a headless Chromium screenshot of the page and quit")
     p.add_argument("--size", type=int, nargs=2, default=(1280, 720), metavar=("W", "H"), help="screenshot size")
+    p.add_argument("--record", metavar="FILE", default=None,
+                   help="live (and teleop): also write the run to FILE (MCAP, as kestrel run --record), until --steps or Ctrl-C")
+    p.add_argument("--record-envs", type=int, default=4, metavar="N", help="record the first N environments (default 4)")
+    p.add_argument("--no-hold", action="store_true", help="quit when --steps are done (default: keep the page up)")
+    p.add_argument("--quiet", action="store_true", help="no progress line (it is shown only on a terminal anyway)")
     return p
 
 
@@ -693,23 +827,59 @@ def view_main(argv: list[str], prog: str = "kestrel view", teleop: bool = False)
         live.viewer.set_viewer_camera(a.camera[:3], a.camera[3:])
     if a.debug_vis:
         live.viewer.draw_debug_vis(True, True)
-    print(f"kestrel view: {label} ({run.mode}) at {live.url}" + (" (teleop: W/S A/D R/F Q/E, Space, click)" if a.teleop else ""))
+    print(f"kestrel view: {label} ({run.mode}) at {live.url}" + (" (teleop: W/S A/D R/F Q/E, Space, click)" if a.teleop else ""),
+          flush=True)
+    recorder = None
+    if a.record:
+        from .record import McapRecorder
+
+        rec_envs = list(range(min(max(1, a.record_envs), run.sim.num_envs)))
+        recorder = McapRecorder(a.record, run.sim, rec_envs, run.env_step_s, label)
+        recorder.write(_teleop_frame(live, rec_envs))
+    from .progress import Progress
+
+    # A teleoperated (or live) run can go on for minutes: a progress line on a terminal, open-ended
+    # without --steps (env-steps done, rate, time so far).
+    progress = Progress(total=a.steps * run.sim.num_envs if a.steps > 0 else None, unit="env-steps",
+                        desc="teleop" + (" recording" if recorder else "") if a.teleop else "view", quiet=a.quiet)
+    k = 0
     try:
         if a.screenshot:
             live.rate = 1e9  # as fast as it steps: the picture is of the state after --steps
             for _ in range(a.steps):
                 live.step()
             return _screenshot(live.viewer, a.screenshot, a.size, close=False)
-        k = 0
         while a.steps <= 0 or k < a.steps:
             live.step()
             k += 1
-        live.hold()
+            if recorder is not None:
+                recorder.write(_teleop_frame(live, rec_envs))
+            progress.update(run.sim.num_envs)
+        progress.close()
+        if recorder is not None:
+            recorder.close()
+            print(f"kestrel view: wrote {a.record} ({len(rec_envs)} envs x {k + 1} frames)", flush=True)
+            recorder = None
+        if not a.no_hold:
+            live.hold()
     except KeyboardInterrupt:
         pass
     finally:
+        progress.close()
+        if recorder is not None:  # Ctrl-C while recording: the file is finished, not lost
+            recorder.close()
+            print(f"kestrel view: wrote {a.record} ({len(rec_envs)} envs x {k + 1} frames)", flush=True)
         live.close()
     return 0
+
+
+def _teleop_frame(live: LiveView, envs: list[int]) -> Frame:
+    """The run's frame with the teleoperated robot's setpoint as its target (what the person set)."""
+    fr = live.run.frame(envs)
+    t = live.teleop
+    if t is not None and t.kind == "position" and t.row < len(envs) * live.run.sim.robots_per_env:
+        fr.robots["target_w"][t.row] = t.command[:3]
+    return fr
 
 
 def _screenshot(viewer: Viewer, path: str, size, close: bool) -> int:

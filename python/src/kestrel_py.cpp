@@ -409,6 +409,60 @@ nb::ndarray<nb::numpy, T> owned_array(std::vector<T>&& v, std::initializer_list<
   return nb::ndarray<nb::numpy, T>(heap->data(), nd, shape, owner);
 }
 
+/// Range image k's rays (the viewer's point clouds, python/kestrel/viewer.py): the sensor-frame ray
+/// table the World renders with, rebuilt here from the sensor's config by the same core functions
+/// (sensors::lidar_rays / camera_rays, as sim/src/compile/world_model.cpp does), and the output
+/// rules needed to turn a pixel back into metres along its ray. Rigid only: the planar 2-D lidar has
+/// no mount or ray table.
+nb::dict range_image_rays(const ks::Simulator& sim, int k) {
+  check_image_index(sim, k);
+  const ks::World& w = rigid_or_raise(sim, "range_image_rays");
+  const int si = world_ray_sensor(w, k);
+  const ks::SensorConfig& c = w.sensor_config(si);
+  const bool cam = c.kind == ks::SensorKind::camera;
+  const std::uint32_t h = cam ? c.camera.height : c.lidar.height, wd = cam ? c.camera.width : c.lidar.width;
+  const std::size_t n = static_cast<std::size_t>(h) * wd;
+  std::vector<kestrel::real> dirs(3 * n), scale(n, 1);
+  kestrel::sensors::RayTable t;
+  t.dirs_s = dirs.data();
+  t.depth_scale = scale.data();
+  t.capacity = static_cast<std::uint32_t>(n);
+  const kestrel::Status st = cam ? kestrel::sensors::camera_rays(c.camera, t) : kestrel::sensors::lidar_rays(c.lidar, t);
+  if (st != kestrel::Status::ok || t.height != h || t.width != wd)
+    throw nb::value_error(("range_image_rays: sensor " + c.name + ": its ray pattern could not be rebuilt").c_str());
+  const kestrel::sensors::RangeOutputParams& r = cam ? c.camera.range : c.lidar.range;
+  std::vector<double> d3(dirs.begin(), dirs.end()), ds(scale.begin(), scale.end());
+  nb::dict d;
+  d["name"] = c.name;
+  d["kind"] = cam ? "camera" : "lidar";
+  d["dirs_s"] = owned_array(std::move(d3), {h, wd, 3});
+  d["depth_scale"] = owned_array(std::move(ds), {h, wd});
+  d["depth"] = cam && c.camera.calculate_depth;
+  d["min_range_m"] = static_cast<double>(r.min_range);
+  d["max_range_m"] = static_cast<double>(r.max_range);
+  d["value_scale_m"] = r.normalize_range ? static_cast<double>(r.max_range) : 1.0;
+  return d;
+}
+
+/// Every robot's mount of range image k (drawn at its environment's last reset): position in the
+/// body frame and the body -> sensor rotation (xyzw), as (num_robots, 3) and (num_robots, 4).
+nb::tuple sensor_mounts(const ks::Simulator& sim, int k) {
+  check_image_index(sim, k);
+  const ks::World& w = rigid_or_raise(sim, "sensor_mounts");
+  const int si = world_ray_sensor(w, k), rpe = sim.robots_per_env();
+  const std::size_t n = static_cast<std::size_t>(sim.num_robots());
+  std::vector<double> p(3 * n), q(4 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const kestrel::sensors::Mount& m = w.sensor_mount(static_cast<int>(i) / rpe, si, static_cast<int>(i) % rpe);
+    for (int a = 0; a < 3; ++a) p[3 * i + a] = static_cast<double>(m.position_b[a]);
+    q[4 * i + 0] = static_cast<double>(m.orientation_bs.x());
+    q[4 * i + 1] = static_cast<double>(m.orientation_bs.y());
+    q[4 * i + 2] = static_cast<double>(m.orientation_bs.z());
+    q[4 * i + 3] = static_cast<double>(m.orientation_bs.w());
+  }
+  return nb::make_tuple(owned_array(std::move(p), {n, 3}), owned_array(std::move(q), {n, 4}));
+}
+
 /// Environment env's obstacles in use: shape type (0 sphere, 1 box, 2 capsule, 3 cylinder,
 /// 4 convex hull; sim/config.hpp ShapeType), sizes, pose, semantic id, asset kind and class, and
 /// each convex hull's body-frame vertices.
@@ -1037,6 +1091,18 @@ NB_MODULE(_core, m) {
             return d;
           },
           "k"_a = 0, "Image k's RangeImage fields: height, width, row_step, col_step (elements), max_range_m, horizontal_fov_rad.")
+      .def(
+          "range_image_rays", [](KSimulator& s, int k) { return range_image_rays(*s.sim, k); }, "k"_a = 0,
+          "Rigid only: image k's rays, to turn pixels into points (the viewer's point clouds): a dict with name,\n"
+          "kind (lidar | camera), dirs_s (height, width, 3: unit ray directions in the sensor frame, pixel for pixel\n"
+          "with range_images(k)), depth_scale (height, width: a depth camera's pixel is range along the ray times\n"
+          "this), depth (bool), value_scale_m (metres per pixel unit: max_range_m when the sensor normalises, else 1),\n"
+          "min_range_m, max_range_m (metres). A pixel v is a return when min <= v * value_scale_m < max; its point\n"
+          "in the sensor frame is v * value_scale_m / depth_scale * dirs_s (see sensor_mounts for the sensor pose).")
+      .def(
+          "sensor_mounts", [](KSimulator& s, int k) { return sensor_mounts(*s.sim, k); }, "k"_a = 0,
+          "Rigid only: (position_b (num_robots, 3), orientation_bs_xyzw (num_robots, 4)), each robot's mount of image k\n"
+          "(drawn at its environment's last reset): sensor point in the world = p_wb + R_wb (position_b + R_bs x_s).")
       .def(
           "world_data", [](nb::pointer_and_handle<KSimulator> s) { return world_data_views(*s.p->sim, s.h); },
           "Rigid only: the World's data (sim/world_data.hpp) as read-only numpy views without copies, a dict:\n"

@@ -200,3 +200,40 @@ def test_progress_line_for_benchmarks():
         q.update(10)
         q.close()
         assert stream.text == "" and q.lines == 0
+
+
+def test_open_ended_progress_line():
+    """total=None (a teleoperated recording until Ctrl-C): done, rate and time so far; no total,
+    percentage or time left; still terminal-only."""
+    from kestrel.progress import Progress, format_line
+
+    assert format_line("teleop", 1500, None, "env-steps", 3.0) == "  teleop: 1.5k env-steps, 500 env-steps/s, 3.0 s"
+
+    class Tty:
+        text = ""
+
+        def __init__(self, tty):
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+        def write(self, s):
+            self.text += s
+
+        def flush(self):
+            pass
+
+    now = [0.0]
+    s, pipe = Tty(True), Tty(False)
+    for stream in (s, pipe):
+        now[0] = 0.0
+        p = Progress(total=None, unit="env-steps", desc="teleop", stream=stream, clock=lambda: now[0])
+        for t in (0.3, 0.6, 0.9):
+            now[0] = t
+            p.update(100)
+        p.close()
+    assert s.text == ("\r" + format_line("teleop", 200, None, "env-steps", 0.6) + "\x1b[K" +
+                      "\r" + format_line("teleop", 300, None, "env-steps", 0.9) + "\x1b[K" +
+                      "\r" + format_line("teleop", 300, None, "env-steps", 0.9) + "\x1b[K\n")
+    assert pipe.text == ""

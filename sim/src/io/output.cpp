@@ -1,7 +1,6 @@
 #include "kestrel/sim/output.hpp"
 
 #include <png.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cinttypes>
@@ -128,66 +127,6 @@ void print_plot_hint(const std::string& out_dir) {
   if (by_caller != nullptr && *by_caller != '\0') return;
   std::printf("  plot: kestrel plot %s  (the Python package, .venv/bin/kestrel; or python -m kestrel.plots %s)\n", out_dir.c_str(),
               out_dir.c_str());
-}
-
-ProgressLine::ProgressLine(std::FILE* out, bool enabled, double total_env_steps)
-    : out_(out), enabled_(enabled && out != nullptr && total_env_steps > 0), total_(total_env_steps),
-      t0_(std::chrono::steady_clock::now()) {}
-
-bool ProgressLine::stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
-
-namespace {
-// 1234567 -> "1.23M": the figures of a progress line, short enough to keep it on one line.
-std::string si(double v) {
-  char b[32];
-  if (v < 1e3) std::snprintf(b, sizeof b, "%.0f", v);
-  else if (v < 1e6) std::snprintf(b, sizeof b, "%.1fk", v / 1e3);
-  else if (v < 1e9) std::snprintf(b, sizeof b, "%.2fM", v / 1e6);
-  else std::snprintf(b, sizeof b, "%.2fG", v / 1e9);
-  return b;
-}
-}  // namespace
-
-std::string ProgressLine::format(double done, double total, double elapsed_s) {
-  const double rate = elapsed_s > 0 ? done / elapsed_s : 0;
-  char left[48] = "? s left";
-  if (rate > 0) {
-    const double s = (total - done) / rate;
-    if (s < 60) std::snprintf(left, sizeof left, "%.1f s left", s);
-    else if (s < 3600) std::snprintf(left, sizeof left, "%d min %02d s left", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-    else std::snprintf(left, sizeof left, "%d h %02d min left", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
-  }
-  char b[160];
-  std::snprintf(b, sizeof b, "  env-steps %s / %s (%.0f%%), %s env-steps/s, %s", si(done).c_str(), si(total).c_str(),
-                total > 0 ? 100.0 * done / total : 0.0, si(rate).c_str(), left);
-  return b;
-}
-
-void ProgressLine::update(double done) {
-  if (enabled_) update_at(done, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
-}
-
-void ProgressLine::update_at(double done, double elapsed_s) {
-  if (!enabled_) return;
-  last_done_ = done;
-  if (elapsed_s < kFirstAfterS || (last_print_s_ >= 0 && elapsed_s - last_print_s_ < kIntervalS)) return;
-  last_print_s_ = elapsed_s;
-  // \r + erase to the end of the line: a terminal only (the line is enabled only there).
-  std::fprintf(out_, "\r%s\033[K", format(done, total_, elapsed_s).c_str());
-  std::fflush(out_);
-  ++lines_;
-}
-
-void ProgressLine::finish() {
-  if (enabled_) finish_at(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
-}
-
-void ProgressLine::finish_at(double elapsed_s) {
-  if (!enabled_ || lines_ == 0) return;
-  std::fprintf(out_, "\r%s\033[K\n", format(last_done_, total_, elapsed_s).c_str());
-  std::fflush(out_);
-  ++lines_;
-  enabled_ = false;  // once
 }
 
 bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {

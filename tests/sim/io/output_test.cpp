@@ -143,6 +143,12 @@ TEST(SimOutput, ProgressLineText) {
   EXPECT_EQ(ProgressLine::format(0, 10, 0.0), "  env-steps 0 / 10 (0%), 0 env-steps/s, ? s left");
 }
 
+// The bench programs' unit (calls, steps, rays) in place of env-steps, same figures.
+TEST(SimOutput, ProgressLineUnit) {
+  EXPECT_EQ(ProgressLine::format(3e6, 4e6, 10.0, "calls"), "  calls 3.00M / 4.00M (75%), 300.0k calls/s, 3.3 s left");
+  EXPECT_EQ(ProgressLine::format(3e6, 4e6, 10.0), ProgressLine::format(3e6, 4e6, 10.0, "env-steps"));
+}
+
 namespace {
 std::string drain(std::FILE* f) {
   std::fflush(f);
@@ -180,6 +186,29 @@ TEST(SimOutput, ProgressLineTiming) {
   short_run.update_at(1000, 0.3);
   short_run.finish_at(0.3);
   EXPECT_EQ(off.lines() + short_run.lines(), 0);
+  EXPECT_EQ(drain(g), "");
+  std::fclose(g);
+}
+
+// clear() erases a shown line (a bench prints its row next) and only then; the next update draws
+// it again; finish() after a clear still ends with the complete line.
+TEST(SimOutput, ProgressLineClear) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  ProgressLine p(f, true, 100, "rays");
+  p.clear();  // nothing shown yet: nothing written
+  p.update_at(40, 0.6);
+  p.clear();
+  p.clear();  // once
+  p.update_at(80, 0.9);
+  p.finish_at(1.0);
+  EXPECT_EQ(drain(f), "\r" + ProgressLine::format(40, 100, 0.6, "rays") + "\033[K\r\033[K\r" + ProgressLine::format(80, 100, 0.9, "rays") +
+                          "\033[K\r" + ProgressLine::format(80, 100, 1.0, "rays") + "\033[K\n");
+  std::fclose(f);
+  std::FILE* g = std::tmpfile();
+  ProgressLine off(g, false, 100);
+  off.update_at(50, 1.0);
+  off.clear();
   EXPECT_EQ(drain(g), "");
   std::fclose(g);
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/sim/progress.hpp"  // ProgressLine, here before it had its own library
 #include "kestrel/sim/world.hpp"
 
 namespace kestrel::sim {
@@ -59,35 +60,6 @@ void report_episodes(RunReport& rep, const WorldSummary& s, real success_radius_
 /// (the console script's `kestrel run`, which plots right after).
 void print_plot_hint(const std::string& out_dir);
 
-/// `kestrel run`'s progress line (issue 15) on a terminal: "  env-steps 1.23M / 4.10M (30%),
-/// 2.05M env-steps/s, 1.4 s left", rewritten in place (carriage return, erase to end of line) at
-/// most every kIntervalS, the first time only kFirstAfterS into the run (a short run prints
-/// nothing), and once more, complete, with a newline by finish(). Disabled: prints nothing.
-class ProgressLine {
- public:
-  static constexpr double kFirstAfterS = 0.5, kIntervalS = 0.25;
-  ProgressLine(std::FILE* out, bool enabled, double total_env_steps);
-  /// True when stderr is a terminal (the condition for enabling it, besides --quiet).
-  static bool stderr_is_terminal();
-  /// done env-steps at the steady clock's now.
-  void update(double done_env_steps);
-  /// done env-steps at elapsed_s since construction (the clock given, for tests).
-  void update_at(double done_env_steps, double elapsed_s);
-  /// The complete line and a newline, if a line was printed; nothing otherwise.
-  void finish();
-  void finish_at(double elapsed_s);
-  /// Lines printed so far (updates and the final one).
-  int lines() const { return lines_; }
-  /// The text of one line (no carriage return): what update_at prints.
-  static std::string format(double done_env_steps, double total_env_steps, double elapsed_s);
-
- private:
-  std::FILE* out_;
-  bool enabled_;
-  double total_, last_done_ = 0, last_print_s_ = -1;
-  int lines_ = 0;
-  std::chrono::steady_clock::time_point t0_;
-};
 
 /// What a run prints as its summary, also kept to be written as DIR/summary.txt (`kestrel run
 /// --out DIR`, every run kind).
