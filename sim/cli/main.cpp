@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "kestrel/sim/batch_step.hpp"
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/output.hpp"
 #include "kestrel/sim/registry.hpp"
@@ -286,6 +287,7 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
     else rep.say("  sensor %s: %s %d x %d, every %d env-step(s)\n", sc.name.c_str(), sc.kind == SensorKind::camera ? "camera" : "lidar",
                      world->sensor_height(k), world->sensor_width(k), sc.every_env_steps);
   }
+  rep.say("  robot step: %s\n", world->batched() ? (std::string("batched, ") + batch::kernel_name()).c_str() : "scalar (one robot at a time)");
   rep.say("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
   // Progress line on a terminal (stderr, so the summary on stdout stays clean to compare). The

@@ -74,6 +74,16 @@ bool force_baseline_kernel(bool on) {
   return have_avx2();
 }
 
+const char* kernel_name() {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return "none (double build: scalar robot step)";
+#elif defined(KESTREL_BATCH_SSE)
+  return have_avx2() ? "AVX2 copy, 4 lanes" : "SSE2 copy, 4 lanes";
+#else
+  return "plain C++ copy, 4 lanes";
+#endif
+}
+
 
 bool eligible(const Models& m) {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE

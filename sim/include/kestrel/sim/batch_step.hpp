@@ -95,6 +95,10 @@ void robot_step(const Models& m, const Lane (&lanes)[kLanes]);
 /// call it while nothing steps.
 bool force_baseline_kernel(bool on);
 
+/// Which copy of the kernel robot_step runs on this CPU ("AVX2 copy, 4 lanes", "SSE2 copy, 4
+/// lanes", ...), for `kestrel run`'s header.
+const char* kernel_name();
+
 /// The stages alone (for the bench's per-stage split), on the same lanes; each writes what the
 /// scalar stage writes. Arrays are structure-of-arrays: wrench[k][lane] with k over
 /// [fx, fy, fz, tx, ty, tz] (body frame), thrust[motor][lane].
