@@ -16,6 +16,7 @@
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/terrain.hpp"
+#include "legged_config.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -370,19 +371,8 @@ TEST(Articulated, MeasuredHeightsFollowTheTerrainAroundTheBase) {
 
 namespace {
 
-// Every randomisation of simulator.* on (legged_gym's / LeggedGym-Ex's domain_rand ranges).
-void randomise_all(WorldConfig& c) {
-  c.simulator.friction_min = 0.5_r;
-  c.simulator.friction_max = 1.25_r;
-  c.simulator.restitution_min = 0;
-  c.simulator.restitution_max = 0.5_r;
-  c.simulator.added_mass_min_kg = -1;
-  c.simulator.added_mass_max_kg = 3;
-  c.simulator.com_bias_max_m = 0.05_r;
-  c.simulator.joint_armature_min_kg_m2 = 0.005_r;
-  c.simulator.joint_armature_max_kg_m2 = 0.02_r;
-  c.simulator.max_push_force_N = 30;
-}
+using kestrel::test::randomise_all_articulated;
+using kestrel::test::tiled_terrain;
 
 // Sum of the ground's vertical force on the feet that sit ahead of the base (body x > 0 at home),
 // as a share of all the feet's.
@@ -404,7 +394,7 @@ double front_share(const Simulator& sim, int robot) {
 
 TEST(Articulated, DomainRandomisationViewsAreDrawnPerRobotWithinTheirRanges) {
   WorldConfig c = legged("go2", 6);
-  randomise_all(c);
+  randomise_all_articulated(c);
   std::string err;
   std::unique_ptr<Simulator> sim = make_simulator(c, err);
   ASSERT_TRUE(sim) << err;
@@ -630,7 +620,7 @@ TEST(Articulated, PushLinksAppliesItsForcesForOnePhysicsStepAndKeepsResultsThrea
   for (int t = 1; t <= 3; ++t) {
     WorldConfig d = legged("go2", 5, t);
     d.task.episode_len_env_steps = 40;
-    randomise_all(d);
+    randomise_all_articulated(d);
     std::unique_ptr<Simulator> s = make_simulator(d, err);
     ASSERT_TRUE(s) << err;
     RngStream rng(5, 0, kPurposeUser + 40);
@@ -651,12 +641,7 @@ TEST(Articulated, PushLinksAppliesItsForcesForOnePhysicsStepAndKeepsResultsThrea
 
 TEST(Articulated, TerrainCurriculumPlacesRobotsOnTilesAndMovesTheirLevels) {
   WorldConfig c = legged("go2", 10);
-  c.env.terrain.type = TerrainType::heightfield;
-  c.env.terrain.procedural = "curriculum";
-  c.env.terrain.num_rows = 4;
-  c.env.terrain.num_cols = 5;
-  c.env.terrain.border_size_m = 2;
-  c.env.terrain.max_init_terrain_level = 1;
+  tiled_terrain(c.env.terrain, 4, 5, 1);
   std::string err;
   std::unique_ptr<Simulator> sim = make_simulator(c, err);
   ASSERT_TRUE(sim) << err;

@@ -5,6 +5,8 @@
 // counts calls on all threads with one atomic counter. The real allocator is glibc's __libc_*.
 #include <gtest/gtest.h>
 
+#include "legged_config.hpp"
+
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -136,16 +138,7 @@ TEST(ArticulatedHeap, NoAllocationInStepsResetsAndPushes) {
     cfg.env.num_physics_steps_per_env_step_mean = 4;
     cfg.num_threads = threads;
     // Every randomisation on, so that their draws and the per-environment model are in the count.
-    cfg.simulator.friction_min = 0.5_r;
-    cfg.simulator.friction_max = 1.25_r;
-    cfg.simulator.restitution_min = 0;
-    cfg.simulator.restitution_max = 0.5_r;
-    cfg.simulator.added_mass_min_kg = -1;
-    cfg.simulator.added_mass_max_kg = 2;
-    cfg.simulator.com_bias_max_m = 0.03_r;
-    cfg.simulator.joint_armature_min_kg_m2 = 0;
-    cfg.simulator.joint_armature_max_kg_m2 = 0.02_r;
-    cfg.simulator.max_push_force_N = 20;
+    kestrel::test::randomise_all_articulated(cfg);
     std::unique_ptr<Simulator> sim = make_simulator(cfg, err);
     ASSERT_TRUE(sim) << err;
     std::vector<real> a(static_cast<std::size_t>(sim->num_robots() * sim->action_dim()));

@@ -21,6 +21,7 @@
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/world.hpp"
+#include "legged_config.hpp"
 
 using namespace kestrel;
 using namespace kestrel::sim;
@@ -62,7 +63,7 @@ TEST(SimGoldenHash, DynamicEnvWithCollisionsMatchesTheFrozenHash) {
 // randomisation of simulator.* on, random joint targets at the torque limits, pushes of the base
 // and of every link, base-contact and timeout resets, 200 env-steps of 4 physics steps, 1 thread.
 namespace {
-constexpr std::uint64_t kGoldenLeggedHash = 0x00e32471a309348bull;
+constexpr std::uint64_t kGoldenLeggedHash = 0x93b6ea6de3a1575bull;
 }  // namespace
 
 TEST(SimGoldenHash, LeggedRunWithContactsPushesAndResetsMatchesTheFrozenHash) {
@@ -73,22 +74,8 @@ TEST(SimGoldenHash, LeggedRunWithContactsPushesAndResetsMatchesTheFrozenHash) {
   c.task.episode_len_env_steps = 60;
   c.env.num_envs = 6;
   c.env.num_physics_steps_per_env_step_mean = 4;
-  c.env.terrain.type = TerrainType::heightfield;
-  c.env.terrain.procedural = "curriculum";
-  c.env.terrain.num_rows = 3;
-  c.env.terrain.num_cols = 3;
-  c.env.terrain.border_size_m = 2;
-  c.env.terrain.max_init_terrain_level = 2;
-  c.simulator.friction_min = 0.5_r;
-  c.simulator.friction_max = 1.25_r;
-  c.simulator.restitution_min = 0;
-  c.simulator.restitution_max = 0.3_r;
-  c.simulator.added_mass_min_kg = -1;
-  c.simulator.added_mass_max_kg = 2;
-  c.simulator.com_bias_max_m = 0.03_r;
-  c.simulator.joint_armature_min_kg_m2 = 0.005_r;
-  c.simulator.joint_armature_max_kg_m2 = 0.02_r;
-  c.simulator.max_push_force_N = 40;
+  kestrel::test::tiled_terrain(c.env.terrain, 3, 3, 2);
+  kestrel::test::randomise_all_articulated(c);
   c.seed = 20261127;
   c.num_threads = 1;
   std::string err;

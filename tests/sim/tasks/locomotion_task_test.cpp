@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "heap_counter.hpp"
+#include "legged_config.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/locomotion_task.hpp"
 #include "kestrel/sim/registry.hpp"
@@ -264,12 +265,7 @@ TEST(LocomotionTask, TerrainCurriculumMovesLevelsByTheDistanceWalked) {
   // On a tiled terrain, at each episode's end: up a level past half a tile (4 m) from the origin,
   // down when closer than half of what the command asked over the episode (|cmd| x 20 s x 0.5).
   WorldConfig c = go2_task(4);
-  c.env.terrain.type = TerrainType::heightfield;
-  c.env.terrain.procedural = "curriculum";
-  c.env.terrain.num_rows = 5;
-  c.env.terrain.num_cols = 2;
-  c.env.terrain.border_size_m = 2;
-  c.env.terrain.max_init_terrain_level = 4;
+  kestrel::test::tiled_terrain(c.env.terrain, 5, 2, 4);
   c.task.episode_len_env_steps = 1000;  // 20 s
   c.task.locomotion.push_robots = false;
   c.task.locomotion.add_noise = false;
@@ -361,17 +357,9 @@ TEST(LocomotionTask, NoHeapInsideStep) {
     c.task.episode_len_env_steps = 5;  // resets inside the counted steps
     c.task.locomotion.push_interval_s = 0.04_r;
     if (tiled) {  // the terrain curriculum, link pushes and the randomisation in the counted steps too
-      c.env.terrain.type = TerrainType::heightfield;
-      c.env.terrain.procedural = "curriculum";
-      c.env.terrain.num_rows = 3;
-      c.env.terrain.num_cols = 2;
-      c.env.terrain.border_size_m = 1;
+      kestrel::test::tiled_terrain(c.env.terrain, 3, 2, 2, 1);
+      kestrel::test::randomise_all_articulated(c);
       c.task.locomotion.push_links_interval_s = 0.04_r;
-      c.simulator.max_push_force_N = 20;
-      c.simulator.friction_min = 0.5_r;
-      c.simulator.friction_max = 1.25_r;
-      c.simulator.added_mass_min_kg = -1;
-      c.simulator.added_mass_max_kg = 1;
     }
     auto t = build(c);
     std::vector<float> a(4 * 12, 0.3f);
