@@ -12,35 +12,11 @@ The same run three times, as tests/sim/cli_progress_test.py does for `kestrel ru
 Standard library only (pty), so it needs no virtual environment.
 """
 import os
-import pty
 import re
-import subprocess
 import sys
 
-
-def run(cmd, tty):
-    if not tty:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-        return p.returncode, p.stdout, p.stderr
-    master, slave = pty.openpty()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=slave, close_fds=True)
-    os.close(slave)
-    err = []
-    while True:
-        try:
-            b = os.read(master, 4096)
-        except OSError:  # EIO once the child has closed the terminal
-            break
-        if not b:
-            break
-        err.append(b)
-    os.close(master)
-    out = p.stdout.read().decode()
-    return p.wait(timeout=600), out, b"".join(err).decode(errors="replace")
-
-
-def value(s):
-    return float(s.rstrip("kMG")) * {"k": 1e3, "M": 1e6, "G": 1e9}.get(s[-1], 1)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "support"))
+from pty_run import run, value  # noqa: E402
 
 
 def main():

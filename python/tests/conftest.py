@@ -1,9 +1,12 @@
 import os
 import pathlib
+import sys
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+# tests/support/pty_run.py: a program's stderr on a pseudo-terminal (the progress-line tests).
+sys.path.insert(0, str(ROOT / "tests" / "support"))
 
 
 @pytest.fixture(scope="session")

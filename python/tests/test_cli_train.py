@@ -97,33 +97,16 @@ def test_progress_bar_only_on_a_terminal_and_not_quiet():
 
 def test_training_progress_bar_on_a_pseudo_terminal(tmp_path):
     """With stderr on a pseudo-terminal the bar is drawn and reaches the end; --quiet silences it."""
-    import fcntl
-    import pty
-    import struct
-    import termios
+    import pty_run
 
     exe = os.path.join(os.path.dirname(sys.executable), "kestrel")
     base = [exe, "train", TASK, "--learner", "rsl_rl", "--envs", "16", "--seed", "0", "--steps", "2560", "--eval-every", "2560",
             "--eval-episodes", "16", "--episode-len", "100", "--threads", "1", "--tensorboard", "0", "--export", "0"]
     for quiet in (False, True):
-        master, slave = pty.openpty()
         # A terminal 120 columns wide (a fresh pseudo-terminal has 0, where tqdm draws an empty bar).
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
         cmd = base + ["--out", str(tmp_path / f"q{int(quiet)}")] + (["--quiet"] if quiet else [])
-        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=slave, close_fds=True)
-        os.close(slave)
-        chunks = []
-        while True:
-            try:
-                b = os.read(master, 4096)
-            except OSError:  # EIO: the child closed the terminal
-                break
-            if not b:
-                break
-            chunks.append(b)
-        os.close(master)
-        assert p.wait(timeout=300) == 0
-        err = b"".join(chunks).decode(errors="replace")
+        rc, _, err = pty_run.run(cmd, timeout=300, columns=120, stdout=subprocess.DEVNULL)
+        assert rc == 0
         if quiet:
             assert "env-step" not in err, err
         else:

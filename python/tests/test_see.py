@@ -10,9 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-import pty
 import re
-import subprocess
 import sys
 
 import numpy as np
@@ -193,21 +191,9 @@ def test_kestrel_train_view_finishes_and_drew(tmp_path):
 
 def _run_on_pty(cmd, timeout=120):
     """cmd with stderr on a pseudo-terminal: (returncode, stdout, stderr)."""
-    master, slave = pty.openpty()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=slave, close_fds=True)
-    os.close(slave)
-    err = []
-    while True:
-        try:
-            b = os.read(master, 4096)
-        except OSError:
-            break
-        if not b:
-            break
-        err.append(b)
-    os.close(master)
-    out = p.stdout.read().decode()
-    return p.wait(timeout=timeout), out, b"".join(err).decode(errors="replace")
+    import pty_run
+
+    return pty_run.run(cmd, timeout=timeout)
 
 
 def test_teleop_records_with_a_progress_line(tmp_path):

@@ -11,10 +11,12 @@ three times:
 Standard library only (pty), so it needs no virtual environment.
 """
 import os
-import pty
 import re
-import subprocess
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+import pty_run  # noqa: E402
+from pty_run import value  # noqa: E402
 
 ENVS, STEPS = 4096, 1000
 LINE = re.compile(r"\r  env-steps ([0-9.]+[kMG]?) / ([0-9.]+[kMG]?) \((\d+)%\), ([0-9.]+[kMG]?) env-steps/s, ([^\r\n\x1b]*) left\x1b\[K")
@@ -24,29 +26,7 @@ def run(kestrel, out_dir, tty, quiet):
     cmd = [kestrel, "run", "--envs", str(ENVS), "--steps", str(STEPS), "--threads", "1", "--out", out_dir]
     if quiet:
         cmd.append("--quiet")
-    if not tty:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-        return p.returncode, p.stdout, p.stderr
-    master, slave = pty.openpty()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=slave, close_fds=True)
-    os.close(slave)
-    err = []
-    while True:
-        try:
-            b = os.read(master, 4096)
-        except OSError:  # EIO once the child has closed the terminal
-            break
-        if not b:
-            break
-        err.append(b)
-    os.close(master)
-    out = p.stdout.read().decode()
-    return p.wait(timeout=600), out, b"".join(err).decode(errors="replace")
-
-
-def value(s):
-    scale = {"k": 1e3, "M": 1e6, "G": 1e9}.get(s[-1], 1)
-    return float(s.rstrip("kMG")) * scale
+    return pty_run.run(cmd, tty=tty)
 
 
 def main():
