@@ -631,7 +631,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         t0 = time.perf_counter()
         res = evaluate(learner.policy(), args.task, args.eval_episodes, args.eval_seed, args.threads, **eval_overrides)
         row = {"env_steps": done_steps, "train_s": round(t_train, 3), "sim_s": round(timer.sim_s, 3), **asdict(res),
-               "eval_s": round(time.perf_counter() - t0, 3), "train_level": env.task.infos.get("curriculum_level", 0)}
+               "eval_s": round(time.perf_counter() - t0, 3), "train_level": env.task.infos.get("curriculum_level", 0),
+               # locomotion_task on legged_gym's tiled terrain: the training envs' mean terrain level now.
+               "train_terrain_level": round(float(env.task.infos.get("mean_terrain_level", 0.0)), 3)}
         rows.append(row)
         if log_w is None:
             log_w = csv.DictWriter(log_f, fieldnames=list(row.keys()))

@@ -213,6 +213,11 @@ class LocomotionTask final : public Task {
     push_steps_ = std::max(1, static_cast<int>(std::ceil(c.push_interval_s / static_cast<real>(dt_))));
     link_push_steps_ = c.push_links_interval_s > 0 ? std::max(1, static_cast<int>(std::ceil(c.push_links_interval_s / static_cast<real>(dt_)))) : 0;
     curriculum_ = c.terrain_curriculum && sim.num_terrain_levels() > 0;
+    if (sim.num_terrain_levels() > 0) {  // the start levels, before any episode has ended
+      double sum = 0;
+      for (int e = 0; e < num_envs_; ++e) sum += sim.terrain_levels()[e];
+      infos_.mean_terrain_level = sum / num_envs_;
+    }
     half_tile_m_ = static_cast<float>(sim.config().env.terrain.tile_length_m) / 2;
     episode_s_ = static_cast<float>(len_) * dt_;
     commands_.assign(n * 4, 0.0f);

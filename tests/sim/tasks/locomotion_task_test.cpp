@@ -273,6 +273,9 @@ TEST(LocomotionTask, TerrainCurriculumMovesLevelsByTheDistanceWalked) {
   ASSERT_TRUE(t);
   Simulator& sim = t->simulator();
   ASSERT_EQ(sim.num_terrain_levels(), 5);
+  double start_mean = 0;
+  for (int e = 0; e < 4; ++e) start_mean += sim.terrain_levels()[e] / 4.0;
+  EXPECT_DOUBLE_EQ(t->infos().mean_terrain_level, start_mean);  // reported from the start
   std::vector<float> a(4 * 12, 0.0f);
   t->step(a.data());
   std::vector<int> before(sim.terrain_levels(), sim.terrain_levels() + 4);
