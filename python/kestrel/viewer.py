@@ -792,6 +792,14 @@ def view_parser(prog: str) -> argparse.ArgumentParser:
     return p
 
 
+def _apply_view_options(viewer, a) -> None:
+    """--camera EYE LOOKAT and --debug-vis, the same for a live run and a replay."""
+    if a.camera:
+        viewer.set_viewer_camera(a.camera[:3], a.camera[3:])
+    if a.debug_vis:
+        viewer.draw_debug_vis(True, True)
+
+
 def view_main(argv: list[str], prog: str = "kestrel view", teleop: bool = False) -> int:
     a = view_parser(prog).parse_args(argv)
     a.teleop = a.teleop or teleop
@@ -804,10 +812,7 @@ def view_main(argv: list[str], prog: str = "kestrel view", teleop: bool = False)
         except (ValueError, FileNotFoundError) as e:
             print(f"kestrel: {e}", file=sys.stderr)
             return 1
-        if a.camera:
-            rv.viewer.set_viewer_camera(a.camera[:3], a.camera[3:])
-        if a.debug_vis:
-            rv.viewer.draw_debug_vis(True, True)
+        _apply_view_options(rv.viewer, a)
         if a.screenshot:
             return _screenshot(rv.viewer, a.screenshot, a.size, close=True)
         print(f"kestrel view: {a.replay}, {len(rv.rec.frames)} frames, at {rv.url}")
@@ -823,10 +828,7 @@ def view_main(argv: list[str], prog: str = "kestrel view", teleop: bool = False)
     except ValueError as e:
         print(f"kestrel: {e}", file=sys.stderr)
         return 1
-    if a.camera:
-        live.viewer.set_viewer_camera(a.camera[:3], a.camera[3:])
-    if a.debug_vis:
-        live.viewer.draw_debug_vis(True, True)
+    _apply_view_options(live.viewer, a)
     print(f"kestrel view: {label} ({run.mode}) at {live.url}" + (" (teleop: W/S A/D R/F Q/E, Space, click)" if a.teleop else ""),
           flush=True)
     recorder = None
