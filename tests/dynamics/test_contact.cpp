@@ -384,3 +384,181 @@ KTEST(Contact, ImplicitDriveGainsKeepALightJointStable) {
   KEXPECT_EQ(dy::step_constrained(m, d, cd, q, qd, tau, 0.005_r, nullptr, 0, dy::ConstraintParams(), bad_kp, kd),
              Status::invalid_argument);
 }
+
+namespace {
+
+// A gripper and a cube as one model, a forest: a carriage on a vertical slide from the world (body
+// 0) with two fingers on horizontal slides (bodies 1, 2; a box pad each), and a free 2.5 cm cube
+// (body 3, its own root), resting on the ground between the open pads.
+struct Gripper {
+  static constexpr int kBodies = 4;
+  dy::MultibodyModel<kBodies> m;
+  dy::MultibodyData<kBodies> d;
+  dy::ConstraintData<kBodies, 16> cd;
+  dy::WarmStart<60> warm;
+  dy::CollisionShape pad[2], cube;
+  dy::HalfSpace ground;
+  static constexpr real kCubeHalf = 0.0125_r, kCubeMass = 0.03_r;  // 3-D printed PLA, 25 mm: ~30 g
+  real q[10] = {}, qd[9] = {};
+  real kp[9] = {}, kd[9] = {}, target[3] = {};
+
+  void build(real friction) {
+    m.num_bodies = kBodies;
+    m.parent[0] = -1;
+    m.joint[0] = dy::JointType::prismatic;
+    m.axis[0] = Vec3(0, 0, 1);
+    m.X_tree[0].r = Vec3(0, 0, kCubeHalf);  // the carriage's origin at the cube's centre height
+    m.body[0] = solid(0.5_r, Vec3(1e-3_r, 1e-3_r, 1e-3_r));
+    for (int f = 0; f < 2; ++f) {
+      m.parent[1 + f] = 0;
+      m.joint[1 + f] = dy::JointType::prismatic;
+      m.axis[1 + f] = Vec3(0, f == 0 ? real(1) : real(-1), 0);  // each opens outward
+      m.body[1 + f] = solid(0.02_r, Vec3(2e-6_r, 2e-6_r, 2e-6_r));
+      pad[f].body = 1 + f;
+      pad[f].type = dy::ShapeType::box;
+      pad[f].size = Vec3(0.008_r, 0.002_r, 0.008_r);  // 16 x 16 mm face, 4 mm thick
+      pad[f].friction = friction;
+    }
+    m.parent[3] = -1;
+    m.joint[3] = dy::JointType::free;
+    m.body[3] = solid(kCubeMass, Vec3::Constant(kCubeMass * 8 * kCubeHalf * kCubeHalf / 12));
+    KASSERT_EQ(dy::finish_model(m), Status::ok);
+    KASSERT_EQ(m.num_dofs, 9);  // 1 + 2 + 6: capacity 4 + 5 holds one free joint besides three sliders
+    cube.body = 3;
+    cube.type = dy::ShapeType::box;
+    cube.size = Vec3::Constant(kCubeHalf);
+    cube.friction = friction;
+    ground.friction = friction;
+    for (real& x : q) x = 0;
+    for (real& x : qd) x = 0;
+    q[0] = 0;                       // carriage at the cube's centre height
+    q[1] = q[2] = 0.025_r;          // pads open: inner faces 25 - 2 = 23 mm from the centre
+    q[3] = 0, q[4] = 0, q[5] = kCubeHalf, q[9] = 1;  // the cube on the ground (free joint: q[3..9])
+    kp[0] = 2000, kd[0] = 100;      // a stiff lift
+    kp[1] = kp[2] = 100, kd[1] = kd[2] = 5;
+    target[0] = 0, target[1] = target[2] = 0.025_r;
+    warm.count = 0;
+  }
+
+  // One 5 ms step with the pads' and cube's contacts; the drives' PD torques, taken implicitly.
+  Status step() {
+    static constexpr real kDt = 0.005_r;
+    dy::forward_kinematics(m, d, q, cd.X_world);
+    dy::ContactPoint contacts[16];
+    int n = 0;
+    for (int f = 0; f < 2; ++f)
+      n += dy::collide_shapes(pad[f], cd.X_world[pad[f].body], cube, cd.X_world[3], 0.002_r, contacts + n, 16 - n, 16 * f);
+    n += dy::collide_halfspace(&cube, 1, cd.X_world, ground, 0.002_r, contacts + n, 16 - n, 4);
+    if (n > 16) return Status::invalid_argument;
+    real tau[9] = {};
+    for (int k = 0; k < 3; ++k) tau[k] = kp[k] * (target[k] - q[k]) - kd[k] * qd[k];
+    tau[0] += (m.body[0].mass + m.body[1].mass + m.body[2].mass) * kG;  // the gripper's own weight, fed forward
+    dy::ConstraintParams p;
+    return dy::step_constrained(m, d, cd, q, qd, tau, kDt, contacts, n, p, kp, kd, &warm);
+  }
+};
+
+}  // namespace
+
+// The grasp of the arm issue, held by contact forces and friction alone: the pads close on the cube
+// with a squeeze of kp x (their overlap target), the carriage lifts by 5 cm, and the cube rises with
+// it and stays in the pads while held; with too little friction for the squeeze (2 mu F < m g) the
+// same motions leave it on the ground.
+KTEST(Contact, AFrictionGraspLiftsTheCubeAndHoldsIt) {
+  static Gripper g;
+  for (real mu : {real(1), real(0.1)}) {
+    g.build(mu);
+    int k = 0;
+    auto run = [&](int steps) {
+      for (int i = 0; i < steps; ++i, ++k) KASSERT_EQ(g.step(), Status::ok);
+    };
+    run(40);  // settle on the ground
+    KEXPECT_CLOSE(g.q[5], Gripper::kCubeHalf, 1e-3, 0, "cube resting height (m)");
+    // Close: each pad's target 5 mm inside the cube's face, a squeeze of 100 x 0.0055 + the
+    // remaining gap ~ 0.6 N per pad.
+    g.target[1] = g.target[2] = Gripper::kCubeHalf + 0.002_r - 0.0055_r;
+    run(100);
+    const real squeeze_N = g.kp[1] * (g.q[1] - g.target[1]);
+    KEXPECT_GT(squeeze_N, real(0.4));
+    for (int i = 1; i <= 100; ++i) {  // lift 5 cm in 0.5 s, smoothly (peak 1.2 m/s^2)
+      const real u = real(i) / 100;
+      g.target[0] = 0.05_r * u * u * (3 - 2 * u);
+      run(1);
+    }
+    run(100);
+    const real lifted = g.q[5] - Gripper::kCubeHalf;
+    const real held_z = g.q[5];
+    run(200);  // hold 1 s
+    const real slip = held_z - g.q[5];
+    if (mu == 1) {
+      // 2 mu F = 1.1 N against m g = 0.29 N: held.
+      KEXPECT_CLOSE(g.q[0], 0.05, 2e-3, 0, "carriage height (m)");
+      KEXPECT_CLOSE(lifted, g.q[0], 2e-3, 0, "cube lifted with the carriage (m)");
+      KEXPECT_LT(std::fabs(slip), real(5e-4));  // no slip while held
+      KEXPECT_LT(std::fabs(g.qd[6]) + std::fabs(g.qd[7]) + std::fabs(g.qd[8]), real(0.05));  // no spin
+    } else {
+      // 2 mu F ~ 0.11 N < m g: the cube slides out and stays on the ground.
+      KEXPECT_LT(g.q[5], Gripper::kCubeHalf + 2e-3_r);
+    }
+  }
+}
+
+// Two-body contacts between shapes: a sphere resting on a box on a body, a box's corner in another
+// box, segments' closest points; the normals push `body` out of `body_b`.
+KTEST(Contact, ShapePairsGiveTheirContacts) {
+  dy::CollisionShape box, ball, cap;
+  box.body = 1;
+  box.type = dy::ShapeType::box;
+  box.size = Vec3(0.1_r, 0.2_r, 0.05_r);
+  ball.body = 0;
+  ball.size = Vec3(0.02_r, 0, 0);
+  dy::Transform X_box, X_ball;  // identity: the box at the origin
+  X_ball.r = Vec3(0.03_r, -0.01_r, 0.05_r + 0.015_r);  // 5 mm into the box's top face
+  dy::ContactPoint c[16];
+  KASSERT_EQ(dy::collide_shapes(ball, X_ball, box, X_box, 0, c, 16, 32), 1);
+  KEXPECT_EQ(c[0].body, 0);
+  KEXPECT_EQ(c[0].body_b, 1);
+  KEXPECT_CLOSE(c[0].separation_m, -0.005, 1e-6, 0, "sphere in box (m)");
+  KEXPECT_CLOSE(c[0].normal_w[2], 1, 1e-6, 0, "normal up");
+  KEXPECT_CLOSE(c[0].point_w[2], 0.045, 1e-6, 0, "the sphere's deepest point");
+  KEXPECT_EQ(c[0].key, 32);
+  // The same pair the other way round: the box is pushed down.
+  KASSERT_EQ(dy::collide_shapes(box, X_box, ball, X_ball, 0, c, 16), 1);
+  KEXPECT_CLOSE(c[0].normal_w[2], -1, 1e-6, 0, "normal down");
+  // Beside the box, beyond the margin: nothing; within it: a speculative contact.
+  X_ball.r = Vec3(0.13_r, 0, 0);
+  KEXPECT_EQ(dy::collide_shapes(ball, X_ball, box, X_box, 0.005_r, c, 16), 0);
+  KASSERT_EQ(dy::collide_shapes(ball, X_ball, box, X_box, 0.02_r, c, 16), 1);
+  KEXPECT_CLOSE(c[0].separation_m, 0.01, 1e-6, 0, "gap (m)");
+  KEXPECT_CLOSE(c[0].normal_w[0], 1, 1e-6, 0, "normal out of the +x face");
+  // A 2 cm cube on the box's top face, 1 mm in: its four bottom corners, nothing of the box's.
+  dy::CollisionShape cube = box;
+  cube.body = 0;
+  cube.size = Vec3::Constant(0.01_r);
+  dy::Transform X_cube;
+  X_cube.r = Vec3(0, 0, 0.05_r + 0.009_r);
+  const int n = dy::collide_shapes(cube, X_cube, box, X_box, 0, c, 16);
+  KASSERT_EQ(n, 4);
+  for (int i = 0; i < n; ++i) {
+    KEXPECT_CLOSE(c[i].separation_m, -0.001, 1e-6, 0, "corner depth (m)");
+    KEXPECT_CLOSE(c[i].normal_w[2], 1, 1e-6, 0, "corner normal");
+    KEXPECT_LT(c[i].key, 8);
+  }
+  // Two capsules crossing at right angles (x and y), 4 mm apart at their cores with radii 5 mm:
+  // 6 mm deep.
+  cap.body = 0;
+  cap.type = dy::ShapeType::capsule;
+  cap.size = Vec3(0.005_r, 0.1_r, 0);
+  dy::CollisionShape cap2 = cap;
+  cap2.body = -1;
+  cap.R_b << 0, 0, 1, 0, 1, 0, -1, 0, 0;    // its z along the world's x
+  cap2.R_b << 1, 0, 0, 0, 0, -1, 0, 1, 0;  // its z along the world's y
+  dy::Transform X_cap;
+  X_cap.r = Vec3(0.02_r, 0, 0.004_r);
+  KASSERT_EQ(dy::collide_shapes(cap, X_cap, cap2, dy::Transform(), 0, c, 16), 1);
+  KEXPECT_EQ(c[0].body_b, -1);
+  KEXPECT_CLOSE(c[0].separation_m, -0.006, 1e-6, 0, "capsule overlap (m)");
+  KEXPECT_CLOSE(c[0].normal_w[2], 1, 1e-6, 0, "capsule normal");
+  KEXPECT_CLOSE(c[0].point_w[0], 0, 1e-6, 0, "at the crossing");
+  KEXPECT_CLOSE(c[0].point_w[2], 0.005, 1e-6, 0, "on b's surface");
+}

@@ -42,12 +42,15 @@
 
 namespace kestrel::dynamics {
 
-/// A contact between a body and the environment: the point on the body (world coordinates), the
-/// unit normal pointing from the environment into the body (the direction the body is pushed),
-/// the signed gap (m; negative: penetration), and the combined friction coefficient and
-/// restitution of the pair.
+/// A contact between a body and the environment or another body of the same model (a gripper's pad
+/// and the cube it holds): the point (world coordinates), the unit normal pointing from the other
+/// side into `body` (the direction `body` is pushed; `body_b` is pushed the other way), the signed
+/// gap (m; negative: penetration), and the combined friction coefficient and restitution of the
+/// pair. The constraint acts on the relative velocity of the two bodies' material points at
+/// `point_w`.
 struct ContactPoint {
   int body = -1;
+  int body_b = -1;  // the other body (-1: the environment, which does not move)
   Vec3 point_w = Vec3::Zero();
   Vec3 normal_w = Vec3(0, 0, 1);
   real separation_m = 0;
@@ -99,6 +102,7 @@ struct ConstraintData {
   real Z[kRows][kDofs];  // L^-T J_i^T: half of the solve, W = Z^T D^-1 Z
   std::int32_t key[kRows];   // the row's name between steps (WarmStart; -1: none)
   std::int16_t leaf[kRows];  // the deepest velocity coordinate row i involves (its chain up from there; -1: none)
+  std::int16_t leaf_b[kRows];  // a two-body contact's second chain (-1: none); row i involves the union
   real W[kRows][kRows];  // Delassus matrix
   real b[kRows], target[kRows], lambda[kRows], lo[kRows], hi[kRows];
   RowKind kind[kRows];
@@ -106,7 +110,7 @@ struct ConstraintData {
   int num_rows = 0;
 
   // Results of the last step: the force (N) each contact applied to its body, world coordinates,
-  // at its point (impulse / h); the limit and dry-friction forces per velocity coordinate (N m or
+  // at its point (impulse / h; a two-body contact's body_b takes the opposite force); the limit and dry-friction forces per velocity coordinate (N m or
   // N); the sweeps the solver used.
   Vec3 contact_force_w[kMaxContacts > 0 ? kMaxContacts : 1];
   real joint_constraint_force[kDofs] = {};
@@ -114,6 +118,21 @@ struct ConstraintData {
 };
 
 namespace detail {
+
+/// Row r's velocity coordinates, deepest first: the union of the chains up from leaf[r] and
+/// leaf_b[r] (both descend, since a coordinate's parent has a smaller index, so they merge like two
+/// sorted lists). Returns how many were written to `chain`.
+template <class CD>
+inline int row_chain(const CD& cd, int r, int* chain) {
+  int a = cd.leaf[r], b = cd.leaf_b[r], len = 0;
+  while (a >= 0 || b >= 0) {
+    const int i = a > b ? a : b;
+    chain[len++] = i;
+    if (a == i) a = cd.dof_parent[a];
+    if (b == i) b = cd.dof_parent[b];
+  }
+  return len;
+}
 
 /// Two unit tangents completing the unit normal n to a right-handed basis (t1, t2, n), chosen by a
 /// fixed rule so that the same normal always gives the same tangents.
@@ -172,6 +191,7 @@ template <int N>
 bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count) {
   for (int i = 0; i < count; ++i) {
     if (c[i].body < 0 || c[i].body >= m.num_bodies) return false;
+    if (c[i].body_b < -1 || c[i].body_b >= m.num_bodies || c[i].body_b == c[i].body) return false;
     if (!all_finite(c[i].point_w) || !all_finite(c[i].normal_w) || !is_finite(c[i].separation_m)) return false;
     if (std::fabs(c[i].normal_w.norm() - 1) > real(1e-3)) return false;
     if (!(c[i].friction >= 0) || !is_finite(c[i].friction)) return false;
@@ -185,8 +205,8 @@ bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count
 /// One step of length dt_s with contacts, joint limits and joint dry friction (see the file
 /// comment): q, qd advance in place; `contacts` (num_contacts <= kMaxContacts; may be null when 0)
 /// were found at q (collide_halfspace below, or the caller's own geometry). cd receives the
-/// contact forces. Status::ok; invalid_argument for a bad dt, count or contact (body out of range,
-/// non-unit normal, negative friction, restitution outside [0, 1]); non_finite_input as aba's
+/// contact forces. Status::ok; invalid_argument for a bad dt, count or contact (body or body_b out
+/// of range, body_b == body, non-unit normal, negative friction, restitution outside [0, 1]); non_finite_input as aba's
 /// (non-finite input, a singular mass matrix, a result that would not be finite). On any refusal
 /// q and qd are left as they were.
 ///
@@ -245,26 +265,35 @@ template <int N, int C, int W = 1>
     cd.owner[r] = static_cast<std::int16_t>(owner);
     cd.lambda[r] = 0;
     cd.key[r] = -1;
-    cd.leaf[r] = -1;
+    cd.leaf[r] = cd.leaf_b[r] = -1;
     cd.target[r] = 0;
     cd.lo[r] = 0;
     cd.hi[r] = std::numeric_limits<real>::infinity();
     return r;
   };
-  real Jp[6 * kDofs];
+  real Jp[6 * kDofs], Jq[6 * kDofs];
+  auto chain_leaf = [&](int body) {  // the last velocity coordinate on the body's chain (-1: none)
+    for (int b = body; b >= 0; b = m.parent[b])
+      if (m.dof_index[b] >= 0) return m.dof_index[b] + joint_dofs(m, b) - 1;
+    return -1;
+  };
   for (int c = 0; c < num_contacts; ++c) {
     const ContactPoint& ct = contacts[c];
     const Transform& Xb = cd.X_world[ct.body];
     point_jacobian(m, d, cd.X_world, ct.body, Vec3(Xb.E * (ct.point_w - Xb.r)), Jp, kDofs);
+    if (ct.body_b >= 0) {  // the relative velocity: body's point minus body_b's point at the same place
+      const Transform& Xo = cd.X_world[ct.body_b];
+      point_jacobian(m, d, cd.X_world, ct.body_b, Vec3(Xo.E * (ct.point_w - Xo.r)), Jq, kDofs);
+      for (int k = 0; k < 3 * kDofs; ++k) Jp[k] -= Jq[k];
+    }
     Vec3 t1, t2;
     detail::tangent_basis(ct.normal_w, t1, t2);
     const Vec3 dir[3] = {ct.normal_w, t1, t2};
-    int leaf = -1;  // the last velocity coordinate on the body's chain
-    for (int b = ct.body; b >= 0 && leaf < 0; b = m.parent[b])
-      if (m.dof_index[b] >= 0) leaf = m.dof_index[b] + joint_dofs(m, b) - 1;
+    const int leaf = chain_leaf(ct.body), leaf_b = ct.body_b >= 0 ? chain_leaf(ct.body_b) : -1;
     for (int a = 0; a < 3; ++a) {
       const int r = new_row(a == 0 ? RowKind::normal : RowKind::tangent, c);
       cd.leaf[r] = static_cast<std::int16_t>(leaf);
+      cd.leaf_b[r] = static_cast<std::int16_t>(leaf_b);
       if (ct.key >= 0) cd.key[r] = 3 * ct.key + a;
       for (int k = 0; k < n; ++k) cd.J[r][k] = dir[a][0] * Jp[k] + dir[a][1] * Jp[kDofs + k] + dir[a][2] * Jp[2 * kDofs + k];
     }
@@ -305,26 +334,29 @@ template <int N, int C, int W = 1>
   cd.num_rows = rows;
 
   // W = J (H + h D)^-1 J^T = Z^T D^-1 Z with Z = L^-T J^T, each column solved along the row's chain
-  // of velocity coordinates alone (a foot's row touches the base and its leg, nothing else), which
-  // is where the tree's sparsity pays (RBDA section 6.5); b = J v*.
+  // of velocity coordinates alone (a foot's row touches the base and its leg, nothing else; a
+  // two-body contact's, the two bodies' chains), which is where the tree's sparsity pays (RBDA
+  // section 6.5); b = J v*. The chain is deepest first, so each coordinate is final before it is
+  // passed up.
+  int chain[kDofs];
   for (int r = 0; r < rows; ++r) {
     real* z = cd.Z[r];
     for (int k = 0; k < n; ++k) z[k] = 0;
-    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) z[i] = cd.J[r][i];
-    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i])
+    const int len = detail::row_chain(cd, r, chain);
+    for (int k = 0; k < len; ++k) z[chain[k]] = cd.J[r][chain[k]];
+    for (int k = 0; k < len; ++k) {
+      const int i = chain[k];
       for (int j = cd.dof_parent[i]; j >= 0; j = cd.dof_parent[j]) z[j] -= cd.H[i][j] * z[i];
+    }
     real bv = 0;
-    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) bv += cd.J[r][i] * v_free[i];
+    for (int k = 0; k < len; ++k) bv += cd.J[r][chain[k]] * v_free[chain[k]];
     cd.b[r] = bv;
   }
   for (int r = 0; r < rows; ++r) {
     // Row r's chain once, with Z_r / D (one division per coordinate, not per pair of rows).
-    int chain[kDofs], len = 0;
+    const int len = detail::row_chain(cd, r, chain);
     real zd[kDofs];
-    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) {
-      chain[len] = i;
-      zd[len++] = cd.Z[r][i] / cd.H[i][i];
-    }
+    for (int k = 0; k < len; ++k) zd[k] = cd.Z[r][chain[k]] / cd.H[chain[k]][chain[k]];
     for (int c = 0; c <= r; ++c) {
       real w = 0;
       for (int k = 0; k < len; ++k) w += zd[k] * cd.Z[c][chain[k]];
@@ -417,8 +449,10 @@ template <int N, int C, int W = 1>
 
   // v = v* + Y^T lambda, then the positions with it.
   real v_new[kDofs] = {};
-  for (int r = 0; r < rows; ++r)
-    for (int i = cd.leaf[r]; i >= 0; i = cd.dof_parent[i]) v_new[i] += cd.J[r][i] * cd.lambda[r];
+  for (int r = 0; r < rows; ++r) {
+    const int len = detail::row_chain(cd, r, chain);
+    for (int k = 0; k < len; ++k) v_new[chain[k]] += cd.J[r][chain[k]] * cd.lambda[r];
+  }
   detail::ltdl_solve(cd.H, cd.dof_parent, n, v_new);  // (H + h D)^-1 J^T lambda
   for (int k = 0; k < n; ++k) v_new[k] += v_free[k];
   if (!all_finite(v_new, n)) return Status::non_finite_input;
@@ -517,6 +551,175 @@ inline int collide_halfspace(const CollisionShape* shapes, int num_shapes, const
           add(s.body, corner, g.normal_w.dot(corner) - g.offset_m, s);
         }
         break;
+    }
+  }
+  return found;
+}
+
+// ----------------------------------------------------------------------------------------------
+// Collision geometry between two shapes (a gripper's pads and the cube, the cube and a container's
+// walls): narrow phase only, the caller chooses the pairs.
+
+namespace detail {
+
+/// Signed distance from p to the surface of a box of half extents h centred at the origin (the
+/// box's frame): positive outside, negative inside. `closest` receives the nearest surface point
+/// and `normal` the box's outward unit normal there (outside: along p - closest; inside: the face
+/// nearest p, the first of equally near ones, so the same input gives the same face).
+inline real box_point_distance(const Vec3& h, const Vec3& p, Vec3& closest, Vec3& normal) {
+  const Vec3 q(std::fabs(p[0]) - h[0], std::fabs(p[1]) - h[1], std::fabs(p[2]) - h[2]);
+  if (q[0] > 0 || q[1] > 0 || q[2] > 0) {
+    for (int a = 0; a < 3; ++a) closest[a] = std::min(std::max(p[a], -h[a]), h[a]);
+    const Vec3 d = p - closest;
+    const real dist = d.norm();
+    normal = d / dist;
+    return dist;
+  }
+  int a = 0;
+  if (q[1] > q[a]) a = 1;
+  if (q[2] > q[a]) a = 2;
+  const real side = p[a] < 0 ? real(-1) : real(1);
+  normal = Vec3::Zero();
+  normal[a] = side;
+  closest = p;
+  closest[a] = side * h[a];
+  return q[a];
+}
+
+/// The closest points of segments [p0, p1] and [q0, q1] (either may be a point): the parameters
+/// s, t in [0, 1] (C. Ericson, "Real-Time Collision Detection", Morgan Kaufmann 2005, section
+/// 5.1.9).
+inline void segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, real& s, real& t) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const real a = d1.dot(d1), e = d2.dot(d2), f = d2.dot(r);
+  const real eps = real(1e-12);
+  auto clamp01 = [](real x) { return std::min(std::max(x, real(0)), real(1)); };
+  if (a <= eps && e <= eps) {
+    s = t = 0;
+    return;
+  }
+  if (a <= eps) {
+    s = 0;
+    t = clamp01(f / e);
+    return;
+  }
+  const real c = d1.dot(r);
+  if (e <= eps) {
+    t = 0;
+    s = clamp01(-c / a);
+    return;
+  }
+  const real b = d1.dot(d2), denom = a * e - b * b;
+  s = denom > eps * a * e ? clamp01((b * f - c * e) / denom) : real(0);  // parallel: any s; take 0
+  t = (b * s + f) / e;
+  if (t < 0) {
+    t = 0;
+    s = clamp01(-c / a);
+  } else if (t > 1) {
+    t = 1;
+    s = clamp01((b - c) / a);
+  }
+}
+
+/// A shape's centre and orientation (shape -> world) in the world; X_body is its body's pose
+/// (Plücker world -> body, as forward_kinematics gives) or the identity for a world shape.
+inline void shape_pose(const CollisionShape& s, const Transform& X_body, Vec3& c_w, Mat3& R_w) {
+  R_w = X_body.E.transpose() * s.R_b;
+  c_w = X_body.r + X_body.E.transpose() * s.p_b;
+}
+
+/// A sphere's or capsule's core segment in the world (a sphere's is a point) and its radius.
+inline real shape_segment(const CollisionShape& s, const Vec3& c_w, const Mat3& R_w, Vec3& e0, Vec3& e1) {
+  const Vec3 half = s.type == ShapeType::capsule ? Vec3(R_w.col(2) * s.size[1]) : Vec3::Zero();
+  e0 = c_w - half;
+  e1 = c_w + half;
+  return s.size[0];
+}
+
+/// A radius that bounds the shape about its centre (the broad-phase test of collide_shapes).
+inline real bounding_radius(const CollisionShape& s) {
+  switch (s.type) {
+    case ShapeType::sphere: return s.size[0];
+    case ShapeType::capsule: return s.size[0] + s.size[1];
+    case ShapeType::box: return s.size.norm();
+  }
+  return 0;
+}
+
+}  // namespace detail
+
+/// The contacts between shape a, on body a.body (>= 0), and shape b, on body b.body or on the world
+/// (b.body = -1, X_b the identity: its p_b and R_b are then world coordinates), whose gap is below
+/// margin_m; each contact pushes a.body along its normal and b.body against it (ContactPoint's
+/// body and body_b). X_a, X_b: the bodies' poses (forward_kinematics). The pairs:
+///  - sphere or capsule with sphere or capsule: one contact between the closest points of their
+///    core segments (two parallel capsules side by side touch at one point of their overlap);
+///  - sphere or capsule with box: each end sphere (a sphere's one) against the box;
+///  - box with box: each corner of either box against the other (the vertex-face contacts of a
+///    face resting on a face: a cube on a floor gets its four corners, a pad pressed on a cube's
+///    face its four). Edge-edge contacts without a corner inside are not found: two boxes crossing
+///    edge on edge can pass through each other; the scenes this serves (pads, cubes, walls) meet
+///    face on face or corner on face.
+/// Friction and restitution are the pair's means (as collide_halfspace). Keys: key_base + the
+/// point's index below 16, so a caller gives each pair its own key_base (multiples of 16). Writes
+/// at most `capacity` contacts and returns how many were found (more than capacity: too small).
+inline int collide_shapes(const CollisionShape& a, const Transform& X_a, const CollisionShape& b, const Transform& X_b,
+                          real margin_m, ContactPoint* out, int capacity, std::int32_t key_base = 0) {
+  Vec3 ca, cb;
+  Mat3 Ra, Rb;
+  detail::shape_pose(a, X_a, ca, Ra);
+  detail::shape_pose(b, X_b, cb, Rb);
+  if ((ca - cb).norm() > detail::bounding_radius(a) + detail::bounding_radius(b) + margin_m) return 0;
+  int found = 0;
+  auto add = [&](int index, const Vec3& point_w, const Vec3& normal_w, real gap) {
+    if (!(gap < margin_m)) return;
+    if (found < capacity) {
+      ContactPoint& c = out[found];
+      c.body = a.body;
+      c.body_b = b.body;
+      c.point_w = point_w;
+      c.normal_w = normal_w;
+      c.separation_m = gap;
+      c.friction = real(0.5) * (a.friction + b.friction);
+      c.restitution = real(0.5) * (a.restitution + b.restitution);
+      c.key = key_base + index;
+    }
+    ++found;
+  };
+  // A sphere (centre p_w, radius r) against box `box` (centre c, orientation R); sign +1 when the
+  // sphere is on a (the box pushes it along the box's normal), -1 when on b.
+  auto sphere_box = [&](int index, const Vec3& p_w, real r, const CollisionShape& box, const Vec3& c, const Mat3& R,
+                        real sign) {
+    Vec3 closest, normal;
+    const real dist = detail::box_point_distance(box.size, Vec3(R.transpose() * (p_w - c)), closest, normal);
+    const Vec3 n_w = R * normal;  // out of the box
+    add(index, p_w - r * n_w, sign * n_w, dist - r);
+  };
+  const bool round_a = a.type != ShapeType::box, round_b = b.type != ShapeType::box;
+  if (round_a && round_b) {
+    Vec3 a0, a1, b0, b1;
+    const real ra = detail::shape_segment(a, ca, Ra, a0, a1), rb = detail::shape_segment(b, cb, Rb, b0, b1);
+    real s = 0, t = 0;
+    detail::segment_closest(a0, a1, b0, b1, s, t);
+    const Vec3 pa = a0 + s * (a1 - a0), pb = b0 + t * (b1 - b0);
+    const Vec3 d = pa - pb;
+    const real dist = d.norm();
+    // Coincident core points: push along the world's z (any fixed direction; the case is degenerate).
+    const Vec3 n = dist > real(1e-9) ? Vec3(d / dist) : Vec3(0, 0, 1);
+    add(0, pb + rb * n, n, dist - ra - rb);
+  } else if (round_a || round_b) {
+    const CollisionShape& round = round_a ? a : b;
+    const CollisionShape& box = round_a ? b : a;
+    Vec3 e0, e1;
+    const real r = detail::shape_segment(round, round_a ? ca : cb, round_a ? Ra : Rb, e0, e1);
+    const real sign = round_a ? real(1) : real(-1);
+    sphere_box(0, e0, r, box, round_a ? cb : ca, round_a ? Rb : Ra, sign);
+    if (round.type == ShapeType::capsule) sphere_box(1, e1, r, box, round_a ? cb : ca, round_a ? Rb : Ra, sign);
+  } else {
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 sgn((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+      sphere_box(k, ca + Ra * Vec3(sgn.cwiseProduct(a.size)), 0, b, cb, Rb, 1);  // a's corners in b
+      sphere_box(8 + k, cb + Rb * Vec3(sgn.cwiseProduct(b.size)), 0, a, ca, Ra, -1);  // b's in a
     }
   }
   return found;

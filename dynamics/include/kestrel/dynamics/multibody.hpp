@@ -9,8 +9,10 @@
 //
 // Bodies are numbered so that a body's parent has a smaller index (-1: the world, z up). Body i
 // hangs from its parent by joint i: a revolute or prismatic joint with one degree of freedom along
-// `axis` (a unit vector in the joint frame), a fixed joint with none, or, for body 0 only, a free
-// joint: the floating base (six degrees of freedom, RBDA section 9.3). The joint frame sits at
+// `axis` (a unit vector in the joint frame), a fixed joint with none, or, for a body hanging from
+// the world, a free joint: a floating base (six degrees of freedom, RBDA section 9.3). Several
+// bodies may hang from the world, so a model is a forest: a robot and the free objects it handles
+// (an arm on a fixed base and the cube it picks) are one model, and contact.hpp couples them. The joint frame sits at
 // X_tree[i] in the parent's frame; body i's frame is the joint frame moved by the joint: X_J(q)
 // (rotation about / translation along the axis; the base's pose for the free joint).
 // Capacities are template parameters; the degrees of freedom are numbered in body order.
@@ -79,7 +81,9 @@ struct MultibodyData {
   real d[kMaxBodies] = {}, u[kMaxBodies] = {};
 };
 
-/// The largest number of velocity coordinates of a tree of capacity N (a floating base adds 5).
+/// The largest number of velocity coordinates of a model of capacity N: N + 5 (one floating base
+/// adds 5 to its body's one). A forest with several free joints fits when its bodies leave room:
+/// num_bodies + 5 x (free joints) <= N + 5, which finish_model checks.
 template <int N>
 constexpr int max_dofs() {
   return N + 5;
@@ -87,8 +91,8 @@ constexpr int max_dofs() {
 
 /// Numbers the degrees of freedom and checks the model: parents before children, unit axes,
 /// positive masses and finite, symmetric positive semi-definite inertias with a positive diagonal,
-/// a free joint only as body 0's (from the world; no armature or damping). invalid_argument
-/// otherwise (the model is then unusable).
+/// free joints only on bodies hanging from the world (no armature or damping), and no more
+/// velocity coordinates than max_dofs<N>(). invalid_argument otherwise (the model is then unusable).
 template <int N>
 [[nodiscard]] Status finish_model(MultibodyModel<N>& m) {
   if (m.num_bodies < 1 || m.num_bodies > N || !all_finite(m.gravity_w)) return Status::invalid_argument;
@@ -98,7 +102,7 @@ template <int N>
     if (m.joint[i] != JointType::revolute && m.joint[i] != JointType::prismatic && m.joint[i] != JointType::fixed &&
         m.joint[i] != JointType::free)
       return Status::invalid_argument;
-    if (m.joint[i] == JointType::free && (i != 0 || m.parent[i] != -1 || m.armature[i] != 0 || m.damping[i] != 0 ||
+    if (m.joint[i] == JointType::free && (m.parent[i] != -1 || m.armature[i] != 0 || m.damping[i] != 0 ||
                                          m.has_limit[i] || m.friction_loss[i] != 0 || m.effort_limit[i] != 0))
       return Status::invalid_argument;
     const SpatialInertia& b = m.body[i];
@@ -130,6 +134,7 @@ template <int N>
     m.dof_index[i] = dof++;
     m.q_index[i] = nq++;
   }
+  if (dof > max_dofs<N>()) return Status::invalid_argument;
   m.num_dofs = dof;
   m.num_q = nq;
   return Status::ok;
@@ -228,14 +233,18 @@ inline Mat6 to_parent(const Transform& X, const Mat6& I) {
 }  // namespace detail
 
 namespace detail {
-/// A floating base's quaternion within 1e-3 of unit length (true without a floating base). Out of
-/// line: inlined into a caller whose q holds one fixed-base coordinate, GCC's -Warray-bounds cannot
-/// see that the free joint's branch is dead and flags q[1..3].
+/// Every floating base's quaternion within 1e-3 of unit length (true without one). Out of line:
+/// inlined into a caller whose q holds one fixed-base coordinate, GCC's -Warray-bounds cannot see
+/// that the free joint's branch is dead and flags q[1..3].
 template <int N>
 __attribute__((noinline)) bool base_quaternion_ok(const MultibodyModel<N>& m, const real* q) {
-  if (m.joint[0] != JointType::free) return true;
-  const real* qb = q + m.q_index[0] + 3;
-  return std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) <= real(1e-3);
+  for (int i = 0; i < m.num_bodies; ++i) {
+    if (m.joint[i] != JointType::free) continue;
+    const real* qb = q + m.q_index[i] + 3;
+    if (!(std::fabs(std::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - 1) <= real(1e-3)))
+      return false;
+  }
+  return true;
 }
 }  // namespace detail
 
