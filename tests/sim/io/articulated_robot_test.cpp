@@ -1,9 +1,13 @@
-// Robot files into the core's articulated-body model (sim/articulated_robot.hpp): the shipped Go2
-// and ANYmal C (models/), their counts, masses, feet, home pose and limits as the files give them;
+// Robot files into the core's articulated-body model (sim/articulated_robot.hpp): the shipped Go2,
+// ANYmal C and SO-101 arm (models/), their counts, masses, feet, home pose and limits as the files
+// give them; the SO-101's gripper pads (which bodies, how far apart at the gripper's limits) and its
+// tool frame's forward kinematics against MuJoCo's;
 // the Go2 as MJCF and as URDF giving the same tree (same mass matrix); and errors that name the
 // file and the problem, leaving the output untouched.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -20,6 +24,7 @@ const std::string kModels = std::string(KESTREL_SIM_TEST_DIR) + "/../../models";
 const std::string kGo2Xml = kModels + "/go2/go2.xml";
 const std::string kGo2Urdf = kModels + "/go2/go2.urdf";
 const std::string kAnymalXml = kModels + "/anymal_c/anymal_c.xml";
+const std::string kSo101Xml = kModels + "/so101/so101.xml";
 
 std::string write_temp(const std::string& name, const std::string& text) {
   const std::string path = std::string(::testing::TempDir()) + "/" + name;
@@ -68,6 +73,45 @@ void expect_quadruped(const ArticulatedRobot& r, double mass_kg) {
     EXPECT_EQ(r.geoms[static_cast<std::size_t>(r.foot_geoms[k])].body, r.foot_bodies[k]);
   }
   EXPECT_NEAR(r.multibody.gravity_w[2], -9.81, 1e-6);
+}
+
+const RobotGeom* find_geom(const ArticulatedRobot& r, const std::string& name) {
+  for (const RobotGeom& g : r.geoms)
+    if (g.name == name) return &g;
+  return nullptr;
+}
+
+// A geom's rotation and centre in the world at the poses X_world (forward_kinematics).
+void geom_pose(const RobotGeom& g, const dynamics::Transform* X_world, Mat3& R, Vec3& p) {
+  const Eigen::Quaternion<real> q(g.quat_xyzw_b[3], g.quat_xyzw_b[0], g.quat_xyzw_b[1], g.quat_xyzw_b[2]);
+  const dynamics::Transform& X = X_world[g.body];
+  R = X.E.transpose() * q.toRotationMatrix();
+  p = X.r + X.E.transpose() * g.pos_b;
+}
+
+// The SO-101's gripper opening at q: the nearest of the moving pad's 8 corners to the fixed pad's
+// inner face, along that face's normal (the fixed pad's +x, towards the moving jaw): negative when
+// the pads overlap. `faces_dot`: the two pads' x axes' dot product (1: the inner faces parallel).
+double pad_gap(const ArticulatedRobot& r, const std::vector<real>& q, double* faces_dot = nullptr) {
+  dynamics::MultibodyData<kMaxRobotBodies> d;
+  dynamics::Transform X_world[kMaxRobotBodies];
+  dynamics::forward_kinematics(r.multibody, d, q.data(), X_world);
+  const RobotGeom& fixed = *find_geom(r, "fixed_jaw_pad");
+  const RobotGeom& moving = *find_geom(r, "moving_jaw_pad");
+  Mat3 Rf, Rm;
+  Vec3 pf, pm;
+  geom_pose(fixed, X_world, Rf, pf);
+  geom_pose(moving, X_world, Rm, pm);
+  const Vec3 n = Rf.col(0);
+  const Vec3 face = pf + n * fixed.size[0];
+  double gap = 1e9;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 s((c & 1 ? 1 : -1) * moving.size[0], (c & 2 ? 1 : -1) * moving.size[1],
+                 (c & 4 ? 1 : -1) * moving.size[2]);
+    gap = std::min(gap, double((pm + Rm * s - face).dot(n)));
+  }
+  if (faces_dot) *faces_dot = double(n.dot(Rm.col(0)));
+  return gap;
 }
 }  // namespace
 
@@ -134,6 +178,105 @@ TEST(SimArticulatedRobot, AnymalCFromMjcf) {
   EXPECT_NEAR(r.home_q[2], 0.6, 1e-6);
   EXPECT_NEAR(r.home_q[6], 1, 1e-7);
   for (std::size_t k = 0; k < legs.size(); ++k) EXPECT_NEAR(r.home_q[7 + k], legs[k], 1e-6) << k;
+}
+
+TEST(SimArticulatedRobot, So101FromMjcf) {
+  const ArticulatedRobot r = load(kSo101Xml);
+  EXPECT_EQ(r.name, "so101");
+  // The base is welded to the world: its box is a world geom, the shoulder hangs from the world.
+  ASSERT_EQ(r.multibody.num_bodies, 7);  // shoulder .. gripper, gripper_frame, moving_jaw
+  EXPECT_EQ(r.multibody.num_dofs, 6);
+  EXPECT_EQ(r.multibody.num_q, 6);
+  const std::vector<std::string> bodies = {"shoulder", "upper_arm",     "lower_arm", "wrist",
+                                           "gripper",  "gripper_frame", "moving_jaw"};
+  const std::vector<std::string> joints = {"shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex",
+                                           "wrist_roll",   "",              "gripper"};
+  EXPECT_EQ(r.body_names, bodies);
+  EXPECT_EQ(r.joint_names, joints);
+  EXPECT_EQ(r.multibody.parent[0], -1);
+  EXPECT_NEAR(r.multibody.X_tree[0].r[0], 0.0388353, 1e-7);
+  EXPECT_NEAR(r.multibody.X_tree[0].r[2], 0.0624, 1e-7);
+  const int frame = find_body(r, "gripper_frame"), gripper = find_body(r, "gripper"), jaw = find_body(r, "moving_jaw");
+  ASSERT_EQ(frame, 5);
+  EXPECT_EQ(r.multibody.joint[frame], dynamics::JointType::fixed);
+  EXPECT_EQ(r.multibody.parent[frame], gripper);
+  EXPECT_EQ(r.multibody.parent[jaw], gripper);
+  // Menagerie's ranges, and its STS3215: force range 2.94 N m, armature, damping, frictionloss.
+  const double lo[] = {-1.91986, -1.7453293, -1.69, -1.658063, -2.7438473, -0.174533};
+  const double hi[] = {1.91986, 1.7453293, 1.69, 1.658063, 2.7438473, 1.7453292};
+  int k = 0;
+  for (int i = 0; i < r.multibody.num_bodies; ++i) {
+    if (r.multibody.joint[i] != dynamics::JointType::revolute) continue;
+    EXPECT_EQ(r.multibody.dof_index[i], k) << i;
+    EXPECT_TRUE(r.multibody.has_limit[i]) << i;
+    EXPECT_NEAR(r.multibody.q_min[i], lo[k], 1e-6) << i;
+    EXPECT_NEAR(r.multibody.q_max[i], hi[k], 1e-6) << i;
+    EXPECT_NEAR(r.multibody.effort_limit[i], 2.94, 1e-6) << i;
+    EXPECT_NEAR(r.multibody.armature[i], 0.028, 1e-8) << i;
+    EXPECT_NEAR(r.multibody.damping[i], 0.60, 1e-7) << i;
+    EXPECT_NEAR(r.multibody.friction_loss[i], 0.052, 1e-8) << i;
+    ++k;
+  }
+  EXPECT_EQ(k, 6);
+  // Menagerie's link masses (the base's 0.147 kg is the world's) and gripper_frame's 0.1 g.
+  EXPECT_NEAR(r.total_mass_kg, 0.100006 + 0.103 + 0.104 + 0.079 + 0.087 + 0.0001 + 0.012, 1e-6);
+  EXPECT_NEAR(r.multibody.body[1].mass, 0.103, 1e-8);
+  EXPECT_NEAR(r.multibody.body[1].com[0], -0.089847, 1e-7);
+  EXPECT_TRUE(r.foot_bodies.empty());
+  // Geoms: the base's box in the world; the pads on the gripper and the moving jaw, 20 x 15 x 4 mm, friction 1.
+  const RobotGeom* base = find_geom(r, "base");
+  ASSERT_NE(base, nullptr);
+  EXPECT_EQ(base->body, -1);
+  const RobotGeom* fixed = find_geom(r, "fixed_jaw_pad");
+  const RobotGeom* moving = find_geom(r, "moving_jaw_pad");
+  ASSERT_NE(fixed, nullptr);
+  ASSERT_NE(moving, nullptr);
+  EXPECT_EQ(fixed->body, gripper);
+  EXPECT_EQ(moving->body, jaw);
+  for (const RobotGeom* pad : {fixed, moving}) {
+    EXPECT_EQ(pad->type, RobotGeomType::box);
+    EXPECT_NEAR(pad->size[0], 0.002, 1e-7);
+    EXPECT_NEAR(pad->size[1], 0.0075, 1e-7);
+    EXPECT_NEAR(pad->size[2], 0.01, 1e-7);
+    EXPECT_NEAR(pad->friction, 1, 1e-7);
+  }
+  for (const RobotGeom& g : r.geoms) EXPECT_NE(g.type, RobotGeomType::plane) << g.name;  // the task adds the table
+  // Home: the keyframe, and gripper_frame's position there as MuJoCo 3.17 computes it from the same
+  // file (mj_resetDataKeyframe(m, d, home), mj_forward, d.xpos[gripper_frame]: 0.20160726,
+  // -0.00050382, 0.08921751): in front of the base, 9 cm above the table.
+  ASSERT_TRUE(r.has_home);
+  const std::vector<real> home = {0, -0.35f, 0.35f, 1.55f, 0, 0};
+  ASSERT_EQ(r.home_q.size(), home.size());
+  for (std::size_t j = 0; j < home.size(); ++j) EXPECT_NEAR(r.home_q[j], home[j], 1e-7) << j;
+  dynamics::MultibodyData<kMaxRobotBodies> d;
+  dynamics::Transform X_world[kMaxRobotBodies];
+  dynamics::forward_kinematics(r.multibody, d, r.home_q.data(), X_world);
+  EXPECT_NEAR(X_world[frame].r[0], 0.20160726, 2e-6);
+  EXPECT_NEAR(X_world[frame].r[1], -0.00050382, 2e-6);
+  EXPECT_NEAR(X_world[frame].r[2], 0.08921751, 2e-6);
+  EXPECT_GT(X_world[frame].E(2, 2), 0.9997);  // its z (the gripper's, opposite the fingers) up
+  // The pads: overlapping at the closed limit, flat and parallel 25 mm apart at gripper = 0.2 rad
+  // (round a 2.5 cm cube), about 8 cm apart at the open limit. The numbers are MuJoCo 3.17's for
+  // the same corners (mj_kinematics, geom_xpos / geom_xmat).
+  std::vector<real> q(6, 0);
+  double dot = 0;
+  q[5] = real(-0.174533);
+  EXPECT_NEAR(pad_gap(r, q), -0.001856, 2e-5);
+  q[5] = real(0.2);
+  EXPECT_NEAR(pad_gap(r, q, &dot), 0.025, 2e-5);
+  EXPECT_NEAR(dot, 1, 1e-6);
+  q[5] = real(1.7453292);
+  EXPECT_NEAR(pad_gap(r, q), 0.079557, 2e-5);
+  EXPECT_GT(pad_gap(r, q), 0.04);
+  // gripper_frame halfway between the pads' centres at that parallel opening.
+  q[5] = real(0.2);
+  dynamics::forward_kinematics(r.multibody, d, q.data(), X_world);
+  Mat3 Rf, Rm;
+  Vec3 pf, pm;
+  geom_pose(*fixed, X_world, Rf, pf);
+  geom_pose(*moving, X_world, Rm, pm);
+  EXPECT_LT((X_world[frame].r - 0.5f * (pf + pm)).norm(), 1e-6);
+  EXPECT_NEAR((pm - pf).norm(), 0.025 + 2 * 0.002, 1e-6);  // centre to centre: the gap and two half-thicknesses
 }
 
 TEST(SimArticulatedRobot, Go2UrdfIsTheSameTreeAsItsMjcf) {
