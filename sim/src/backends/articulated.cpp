@@ -141,35 +141,10 @@ class ArticulatedSimulator final : public Simulator {
     for (const RobotGeom& g : robot_.geoms) {
       if (g.body < 0) continue;  // world geometry of the file: the terrain stands for the ground
       dy::CollisionShape s;
-      s.body = g.body;
-      s.p_b = g.pos_b;
-      s.R_b = rotation_matrix(quat_from_xyzw(g.quat_xyzw_b));
-      s.friction = g.friction;
-      switch (g.type) {
-        case RobotGeomType::sphere:
-          s.type = dy::ShapeType::sphere;
-          s.size = Vec3(g.size[0], 0, 0);
-          break;
-        case RobotGeomType::capsule:
-          s.type = dy::ShapeType::capsule;
-          s.size = Vec3(g.size[0], g.size[1], 0);
-          break;
-        case RobotGeomType::box:
-          s.type = dy::ShapeType::box;
-          s.size = g.size;
-          break;
-        case RobotGeomType::cylinder:  // its two end discs' rims, approximated by end spheres
-          s.type = dy::ShapeType::capsule;
-          s.size = Vec3(g.size[0], g.size[1], 0);
-          break;
-        case RobotGeomType::ellipsoid:  // its bounding box's corners
-          s.type = dy::ShapeType::box;
-          s.size = g.size;
-          break;
-        case RobotGeomType::plane:
-          error = pre + c.robot.model_file + ": a plane geom on a moving body (" + robot_.body_names[static_cast<std::size_t>(g.body)] +
-                  ") cannot collide with the terrain";
-          return false;
+      if (!to_collision_shape(g, s)) {
+        error = pre + c.robot.model_file + ": a plane geom on a moving body (" + robot_.body_names[static_cast<std::size_t>(g.body)] +
+                ") cannot collide with the terrain";
+        return false;
       }
       shapes_.push_back(s);
     }

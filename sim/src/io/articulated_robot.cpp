@@ -16,6 +16,8 @@
 #include <memory>
 #include <mutex>
 
+#include "kestrel/kernel/quaternion.hpp"
+
 namespace kestrel::sim {
 
 namespace {
@@ -352,6 +354,32 @@ int find_body(const ArticulatedRobot& robot, const std::string& name) {
   for (std::size_t i = 0; i < robot.body_names.size(); ++i)
     if (robot.body_names[i] == name) return static_cast<int>(i);
   return -1;
+}
+
+bool to_collision_shape(const RobotGeom& g, dynamics::CollisionShape& s) {
+  s.body = g.body;
+  s.p_b = g.pos_b;
+  s.R_b = rotation_matrix(quat_from_xyzw(g.quat_xyzw_b));
+  s.friction = g.friction;
+  switch (g.type) {
+    case RobotGeomType::sphere:
+      s.type = dynamics::ShapeType::sphere;
+      s.size = Vec3(g.size[0], 0, 0);
+      return true;
+    case RobotGeomType::capsule:
+    case RobotGeomType::cylinder:
+      s.type = dynamics::ShapeType::capsule;
+      s.size = Vec3(g.size[0], g.size[1], 0);
+      return true;
+    case RobotGeomType::box:
+    case RobotGeomType::ellipsoid:
+      s.type = dynamics::ShapeType::box;
+      s.size = g.size;
+      return true;
+    case RobotGeomType::plane:
+      return false;
+  }
+  return false;
 }
 
 std::string models_dir() {

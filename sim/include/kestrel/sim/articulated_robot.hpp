@@ -44,6 +44,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/dynamics/contact.hpp"
 #include "kestrel/dynamics/multibody.hpp"
 #include "kestrel/kernel/types.hpp"
 
@@ -90,5 +91,11 @@ std::string models_dir();
 
 /// The body index of `name`, -1 if none.
 int find_body(const ArticulatedRobot& robot, const std::string& name);
+
+/// A geom of the file as the core's collision primitive (dynamics/contact.hpp) on its body: a
+/// sphere, capsule or box as itself; a cylinder as the capsule of its radius and half-length (its
+/// end discs' rims become end spheres); an ellipsoid as its bounding box. False for a plane (no
+/// primitive of the core's is a plane on a body).
+bool to_collision_shape(const RobotGeom& g, dynamics::CollisionShape& out);
 
 }  // namespace kestrel::sim
