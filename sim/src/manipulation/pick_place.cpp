@@ -259,6 +259,29 @@ Status PickPlaceWorld::step(const real* joint_targets_rad) {
   return st;
 }
 
+int PickPlaceWorld::scene_shapes(PickPlaceShape* out, int capacity) const {
+  const Impl& im = *impl_;
+  int count = 0;
+  auto put = [&](const dy::CollisionShape& s, PickPlaceEntity entity, int index) {
+    if (count < capacity) {
+      out[count].shape = s;
+      out[count].X_body = s.body >= 0 ? im.cd.X_world[s.body] : dy::Transform();
+      out[count].entity = entity;
+      out[count].index = index;
+    }
+    ++count;
+  };
+  for (std::size_t i = 0; i < im.arm_shapes.size(); ++i) put(im.arm_shapes[i], PickPlaceEntity::robot, static_cast<int>(i));
+  put(im.cube, PickPlaceEntity::cube, 0);
+  for (int p = 0; p < kBoxParts; ++p) put(im.box[p], PickPlaceEntity::box, p);
+  return count;
+}
+
+dy::Transform PickPlaceWorld::body_pose(int body) const {
+  if (body < 0 || body >= impl_->model.num_bodies) return dy::Transform();
+  return impl_->cd.X_world[body];
+}
+
 int PickPlaceWorld::solver_iterations_used() const { return impl_->cd.iterations_used; }
 
 bool PickPlaceWorld::cube_in_box() const {

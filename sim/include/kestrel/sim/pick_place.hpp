@@ -69,6 +69,19 @@ struct PickPlaceConfig {
   real success_height_m = 0.10_r;
 };
 
+/// What a scene shape belongs to (its colour in a camera image, its name in a segmentation).
+enum class PickPlaceEntity : std::uint8_t { table = 0, robot = 1, cube = 2, box = 3 };
+
+/// A collision shape of the scene in the world at the current state: the primitive (its p_b, R_b
+/// in its body's frame, or the world's for the box's parts) and its body's pose (world -> body,
+/// forward_kinematics's; the identity for a world shape). The table is the plane z = 0.
+struct PickPlaceShape {
+  dynamics::CollisionShape shape;
+  dynamics::Transform X_body;
+  PickPlaceEntity entity = PickPlaceEntity::robot;
+  int index = 0;  // within its entity (the arm's shapes in file order, the box's parts 0-4)
+};
+
 /// Tool-centre-point pose of the arm and the cube's pose, the task's observations beside q, qd.
 struct PickPlaceState {
   Vec3 tcp_pos_w = Vec3::Zero();
@@ -117,6 +130,13 @@ class PickPlaceWorld {
   /// pads' faces normal to the world's x (yaw 0) or y (yaw pi/2) as `yaw_rad` says: damped least
   /// squares (dynamics/ik.hpp) from `q_start` (six angles). Returns the position error (m).
   real solve_tcp(const Vec3& p_w, real yaw_rad, const real* q_start, real* q_out) const;
+  /// The scene's shapes at the current state (the arm's, the cube, the box's five parts; the table
+  /// is the plane z = 0): writes at most `capacity`, returns how many there are.
+  int scene_shapes(PickPlaceShape* out, int capacity) const;
+  /// A body's pose at the current state (world -> body; -1: the identity). The tool centre point's
+  /// body is tcp_body().
+  dynamics::Transform body_pose(int body) const;
+  int tcp_body() const { return tcp_body_; }
   /// Places the cube at p_w (centre) with orientation quat_xyzw, at rest: for tests.
   void set_cube_pose(const Vec3& p_w, const Vec4& quat_xyzw);
   std::uint64_t state_hash() const;
