@@ -4,8 +4,10 @@
 // contacts (the whole step: servos, collision, constrained solve; timed over the episodes, IK
 // excluded), the contacts and solver sweeps per step, and the cube's drift at rest in the box.
 //
-//   kestrel_bench_pick_place [episodes=1000] [seed=1] [csv path]
-// prints a summary line and, with a path, writes one CSV row per episode.
+//   kestrel_bench_pick_place [episodes=1000] [seed=1] [csv path] [actions csv path]
+// prints a summary line and, with a path, writes one CSV row per episode; with an actions path, the
+// first episode's joint targets and the cube's position per action (what
+// bench/manipulation/mujoco_side_by_side.py replays in MuJoCo).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +22,12 @@ int main(int argc, char** argv) {
   const int episodes = argc > 1 ? std::atoi(argv[1]) : 1000;
   const std::uint64_t seed = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 1;
   const char* csv_path = argc > 3 ? argv[3] : nullptr;
+  std::FILE* trace = argc > 4 ? std::fopen(argv[4], "w") : nullptr;
+  if (argc > 4 && trace == nullptr) {
+    std::fprintf(stderr, "bench_pick_place: cannot write %s\n", argv[4]);
+    return 1;
+  }
+  if (trace != nullptr) std::fprintf(trace, "t_s,phase,q0,q1,q2,q3,q4,q5,cube_x,cube_y,cube_z,box_x,box_y\n");
   PickPlaceConfig cfg;
   PickPlaceWorld w;
   std::string err;
@@ -59,6 +67,13 @@ int main(int argc, char** argv) {
       s.act(a);
       timed_step(a);
       ++actions;
+      if (trace != nullptr && e == 0) {
+        const Vec3 c = w.state().cube_pos_w, b = w.state().box_pos_w;
+        std::fprintf(trace, "%.3f,%d", static_cast<double>(actions) * cfg.dt_s * cfg.decimation, s.phase());
+        for (int j = 0; j < PickPlaceWorld::kJoints; ++j) std::fprintf(trace, ",%.7f", static_cast<double>(a[j]));
+        std::fprintf(trace, ",%.5f,%.5f,%.5f,%.5f,%.5f\n", static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2]),
+                     static_cast<double>(b[0]), static_cast<double>(b[1]));
+      }
       if (s.phase() == 3) lifted = w.state().cube_pos_w[2];
       if (s.phase() == 4) {
         const Vec3 off = w.state().cube_pos_w - w.state().tcp_pos_w;
@@ -83,6 +98,7 @@ int main(int argc, char** argv) {
                    static_cast<double>(cube0[1]), static_cast<double>(box0[0]), static_cast<double>(box0[1]));
   }
   if (csv != nullptr) std::fclose(csv);
+  if (trace != nullptr) std::fclose(trace);
   std::printf(
       "pick_place: %d/%d successes (%.1f %%), %d step errors; physics %.0f steps/s on one core (%.2f us/step), "
       "%.1f contacts and %.1f solver sweeps per step; worst slip while carried %.2f mm, worst drift at rest in the "
