@@ -69,8 +69,11 @@ class _RslRlImpl:
         self.episode_length_buf = torch.zeros(self.num_envs, dtype=torch.long)
         self.device = device
         self.cfg = {"task": env.task.name, "controller": env.task.controller, "num_envs": self.num_envs}
-        self._low = float(env.single_action_space.low[0])
-        self._high = float(env.single_action_space.high[0])
+        # One bound for every component (most tasks), or one per component (so101_pick_place's joint ranges).
+        low, high = env.single_action_space.low, env.single_action_space.high
+        same = bool(np.all(low == low[0]) and np.all(high == high[0]))
+        self._low = float(low[0]) if same else torch.as_tensor(low)
+        self._high = float(high[0]) if same else torch.as_tensor(high)
         self._episodes = 0
         self._successes = 0
 

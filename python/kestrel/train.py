@@ -272,7 +272,10 @@ class Learner:
             from tensordict import TensorDict
 
             net = self.runner.get_inference_policy()
-            lo, hi = float(self.env.single_action_space.low[0]), float(self.env.single_action_space.high[0])
+            low, high = self.env.single_action_space.low, self.env.single_action_space.high
+            same = bool(np.all(low == low[0]) and np.all(high == high[0]))
+            lo = float(low[0]) if same else torch.as_tensor(low)
+            hi = float(high[0]) if same else torch.as_tensor(high)
             squash = self.squash
 
             def act(obs: np.ndarray) -> np.ndarray:

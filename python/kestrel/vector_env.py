@@ -74,6 +74,10 @@ GYM_IDS: dict[str, tuple[str, dict]] = {
                                                     "task": "locomotion_anymal_c_flat"}),
     "Kestrel-AnymalC-Rough-v0": ("locomotion_task", {"robot": _LEGGED_GYM_JOINTS("anymal_c"), "env": "legged_rough",
                                                      "task": "locomotion_anymal_c_rough", "simulator": {"name": "rigid", "friction": [0.5, 1.25]}}),
+    # LeIsaac's SO-101 pick-and-place (so101_pick_place, sim/pick_place_task.hpp): 31 state
+    # observations, 6 absolute joint targets bounded by the joint ranges; task={"pick_place":
+    # {"action_mode": "ee_delta"}} for the teleoperation action space (5: tcp delta, yaw delta, gripper).
+    "Kestrel-SO101-PickPlace-v0": ("so101_pick_place", {}),
 }
 
 
@@ -154,7 +158,11 @@ class KestrelVectorEnv(VectorEnv):
         self._vehicle_frame = bool(vehicle_frame_obs)
         if self._vehicle_frame and not self._is_setpoint:
             raise ValueError("vehicle_frame_obs: only for position_setpoint_task")
-        self.single_action_space = spaces.Box(-bound, bound, (ad,), np.float32)
+        per = self.task.action_bounds  # per-component bounds (so101_pick_place: the joint ranges)
+        if per is not None and self._scale is None:
+            self.single_action_space = spaces.Box(np.asarray(per[0], np.float32), np.asarray(per[1], np.float32), (ad,), np.float32)
+        else:
+            self.single_action_space = spaces.Box(-bound, bound, (ad,), np.float32)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.render_mode = None
         self.closed = False

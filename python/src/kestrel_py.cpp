@@ -742,11 +742,20 @@ NB_MODULE(_core, m) {
       .def_prop_ro("controller",
                    [](KTask& p) {
                      // An articulated robot is driven by its joint PD, not the scenario's controller.
-                     return p.cfg.robot.kind == kestrel::robots::RobotKind::articulated
+                     return p.t().simulator().config().robot.kind == kestrel::robots::RobotKind::articulated
                                 ? std::string(p.t().simulator().controller_name())
                                 : p.cfg.controller.name;
                    })
       .def_prop_ro("success_radius_m", [](KTask& p) { return static_cast<double>(p.cfg.task.success_radius_m); })
+      .def_prop_ro(
+          "action_bounds",
+          [](KTask& p) -> nb::object {
+            std::vector<float> lo(p.ad()), hi(p.ad());
+            if (!p.t().action_bounds(lo.data(), hi.data())) return nb::none();
+            return nb::make_tuple(lo, hi);
+          },
+          "(low, high) lists of action_dim floats where the task clamps each action component to its own range "
+          "(so101_pick_place: the joint ranges), else None.")
       .def_prop_ro("episode_len_env_steps", [](KTask& p) { return p.cfg.task.episode_len_env_steps; })
       .def_prop_ro("state_hash", [](KTask& p) { return p.t().state_hash(); })
       .def_prop_ro(

@@ -102,7 +102,11 @@ int run_task(const WorldConfig& cfg, Backend backend, const std::string& label, 
   rep.say("  task %s: %d envs x (%d obs, %d actions), simulator %s, controller %s, env %s, threads %d, seed %" PRIu64
           ", steps %lld, policy %s\n", task->name(), n, od, ad, task->backend_name(), task->simulator().controller_name(),
           cfg.env.name.c_str(), task->num_threads(), cfg.seed, steps, scripted ? "scripted" : "zero");
-  if (cfg.robot.kind == robots::RobotKind::articulated)
+  if (std::string(task->name()) == "so101_pick_place")
+    rep.say("  scene: SO-101 arm (models/so101/so101.xml), %.0f mm cube, box; actions %s; scripted policy: ScriptedPickPlace "
+            "(DLS IK pick and place)\n", static_cast<double>(2000 * cfg.task.pick_place.cube_half_m),
+            cfg.task.pick_place.action_mode == PickPlaceActionMode::ee_delta ? "ee_delta" : "joint_position");
+  else if (cfg.robot.kind == robots::RobotKind::articulated)
     rep.say("  robot: %s (%s), %d joints, %d feet; scripted policy: every joint held at home\n", cfg.robot.name.c_str(),
             cfg.robot.model_file.c_str(), task->simulator().num_dofs(), task->simulator().num_feet());
   else

@@ -184,6 +184,10 @@ void apply_task(const YAML::Node& n, TaskConfig& t) {
       }
     }
   }
+  if (const YAML::Node pp = n["pick_place"]) {
+    if (!pp.IsMap()) bad("task.pick_place", "expected a map of " + std::string(pick_place_schema().doc));
+    apply_schema(pp, "task.pick_place", pick_place_schema(), t.pick_place);
+  }
   if (const YAML::Node nav = n["navigation"]) {
     if (!nav.IsMap()) bad("task.navigation", "expected a map of max_speed_m_s, max_yaw_rate_rad_s, pool_rows, pool_cols, reward");
     apply_schema(nav, "task.navigation", navigation_schema(), t.navigation);

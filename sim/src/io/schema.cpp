@@ -137,6 +137,7 @@ const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall",
 const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
 const char* const kNavigationActionSpaces[] = {"forward_inclination", "velocity"};
 const char* const kNoiseModels[] = {"none", "range_dependent", "multiplier"};
+const char* const kPickPlaceActionModes[] = {"joint_position", "ee_delta"};
 
 }  // namespace
 
@@ -419,6 +420,7 @@ const Schema<TaskConfig>& task_schema() {
   static const StructuralKey st[] = {{"curriculum", "the obstacle curriculum of navigation_task (section task.curriculum)"},
                                      {"navigation", "navigation_task's action scaling, pooling and reward (section task.navigation)"},
                                      {"locomotion", "locomotion_task's commands, observations and rewards (section task.locomotion)"},
+                                     {"pick_place", "so101_pick_place's scene, action mode and reward (section task.pick_place)"},
                                      {"reward", "the reward's constants: position_setpoint_task's (section task.reward); for "
                                                 "navigation_task the keys of task.navigation.reward"}};
   static const Schema<S> s{"task", "the scripted task (`task: NAME` or a map; an RL task id brings its own scene)", f, std::size(f),
@@ -494,6 +496,55 @@ const Schema<LocomotionConfig>& locomotion_schema() {
                                "default [thigh, calf, shank]"}};
   static const Schema<S> s{"task.locomotion", "locomotion_task's commands, observations, noise, reward parameters and pushes "
                                                "(legged_gym's LeggedRobotCfg)", f, std::size(f), st, std::size(st)};
+  return s;
+}
+
+const Schema<PickPlaceTaskConfig>& pick_place_schema() {
+  using S = PickPlaceTaskConfig;
+  constexpr double kBig = 1e6;
+  static const Field<S> f[] = {
+      choice_f<S>(
+          "action_mode", "joint_position, ee_delta",
+          [](S& s, const std::string& v) { return set_enum(kPickPlaceActionModes, v, s.action_mode); },
+          [](const S& s) { return enum_name(kPickPlaceActionModes, s.action_mode); },
+          "joint_position: 6 absolute joint targets (rad, LeIsaac's); ee_delta: 5 (tool-centre-point dx, dy, dz in m, yaw "
+          "delta in rad, gripper target in rad) through damped-least-squares IK, for teleoperation"),
+      real_f<S>("dt_s", &S::dt_s, "s", 1e-5, 0.1, "physics step"),
+      int_f<S>("decimation", &S::decimation, 1, 1000, nullptr, "physics steps per action (4 x 5 ms: 50 Hz actions)"),
+      int_f<S>("solver_iterations", &S::solver_iterations, 1, 10000, nullptr, "contact solver iterations per physics step"),
+      real_f<S>("arm_kp_Nm_rad", &S::arm_kp_Nm_rad, "N m/rad", 0, kBig, "the five arm joints' servo stiffness"),
+      real_f<S>("arm_kd_Nms_rad", &S::arm_kd_Nms_rad, "N m s/rad", 0, kBig, "the arm joints' servo damping"),
+      real_f<S>("gripper_kp_Nm_rad", &S::gripper_kp_Nm_rad, "N m/rad", 0, kBig, "the gripper's servo stiffness (the squeeze)"),
+      real_f<S>("gripper_kd_Nms_rad", &S::gripper_kd_Nms_rad, "N m s/rad", 0, kBig, "the gripper's servo damping"),
+      real_f<S>("cube_half_m", &S::cube_half_m, "m", 1e-3, 0.1, "the cube's half side"),
+      real_f<S>("cube_mass_kg", &S::cube_mass_kg, "kg", 1e-4, 10, "the cube's mass"),
+      real_f<S>("cube_friction", &S::cube_friction, "", 0, 10, "the cube's Coulomb friction coefficient"),
+      vec3b_f<S>("cube_pos_w", &S::cube_pos_w, "m", -1, 1, "the cube's nominal centre x, y (z: resting on the table)"),
+      vec3b_f<S>("box_pos_w", &S::box_pos_w, "m", -1, 1, "the box's nominal centre x, y (its floor's bottom face, z ignored)"),
+      real_f<S>("box_friction", &S::box_friction, "", 0, 10, "the box's friction coefficient"),
+      real_f<S>("table_friction", &S::table_friction, "", 0, 10, "the table's friction coefficient"),
+      real_f<S>("randomize_xy_m", &S::randomize_xy_m, "m", 0, 0.5, "cube and box drawn uniformly within +-this in x and y at each reset"),
+      real_f<S>("success_xy_m", &S::success_xy_m, "m", 1e-4, 1, "cube_in_box: the cube's centre within +-this of the box's in x and y"),
+      real_f<S>("success_height_m", &S::success_height_m, "m", 1e-4, 1, "cube_in_box: the cube's centre below this"),
+      int_f<S>("success_hold_steps", &S::success_hold_steps, 1, 100000, nullptr,
+               "success (terminated): cube_in_box and released (pads' force < release_force_N) for this many consecutive actions"),
+      real_f<S>("release_force_N", &S::release_force_N, "N", 0, kBig, "the pads' force on the cube below which it counts as released"),
+      real_f<S>("ee_max_delta_m", &S::ee_max_delta_m, "m", 1e-5, 1, "ee_delta: each position delta clipped to +-this per action"),
+      real_f<S>("ee_max_yaw_delta_rad", &S::ee_max_yaw_delta_rad, "rad", 0, 3.2, "ee_delta: the yaw delta clipped to +-this per action"),
+      real_f<S>("reach_weight", &S::reach_weight, "", -kBig, kBig, "reward reach: weight x (1 - tanh(|cube - tcp| / reach_scale_m))"),
+      real_f<S>("reach_scale_m", &S::reach_scale_m, "m", 1e-6, kBig, ""),
+      real_f<S>("grasp_weight", &S::grasp_weight, "", -kBig, kBig, "reward grasp: weight while the pads squeeze the cube with > grasp_force_N"),
+      real_f<S>("grasp_force_N", &S::grasp_force_N, "N", 0, kBig, ""),
+      real_f<S>("lift_weight", &S::lift_weight, "", -kBig, kBig,
+                "reward lift: weight x clip(cube height above its rest / lift_height_m, 0, 1) while grasped"),
+      real_f<S>("lift_height_m", &S::lift_height_m, "m", 1e-6, kBig, ""),
+      real_f<S>("place_weight", &S::place_weight, "", -kBig, kBig,
+                "reward place: weight x (1 - tanh(|cube - box|_xy / place_scale_m)) while grasped and lifted, or in the box"),
+      real_f<S>("place_scale_m", &S::place_scale_m, "m", 1e-6, kBig, ""),
+      real_f<S>("success_reward", &S::success_reward, "", -kBig, kBig, "reward success: added on the step that succeeds"),
+  };
+  static const Schema<S> s{"task.pick_place", "so101_pick_place's scene (sim/pick_place.hpp), action mode, success rule and shaped reward",
+                           f, std::size(f), nullptr, 0};
   return s;
 }
 
@@ -952,6 +1003,7 @@ bool check_config_fields(const WorldConfig& c, std::string& error) {
       !check_fields(navigation_reward_schema(), c.task.navigation.reward, "task.navigation.reward", error) ||
       !check_fields(locomotion_schema(), c.task.locomotion, "task.locomotion", error) ||
       !check_fields(locomotion_scales_schema(), c.task.locomotion.scales, "task.locomotion.scales", error) ||
+      !check_fields(pick_place_schema(), c.task.pick_place, "task.pick_place", error) ||
       !check_fields(position_setpoint_reward_schema(), c.task.reward, "task.reward", error) ||
       !check_fields(controller_schema(), c.controller, "controller", error))
     return false;
@@ -990,6 +1042,7 @@ std::string scenario_reference_markdown() {
   document(out, navigation_reward_schema());
   document(out, locomotion_schema());
   document(out, locomotion_scales_schema());
+  document(out, pick_place_schema());
   document(out, position_setpoint_reward_schema());
   SensorConfig lidar, camera;
   lidar.kind = SensorKind::lidar;

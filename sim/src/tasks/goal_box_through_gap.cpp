@@ -4,6 +4,7 @@
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/locomotion_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
+#include "kestrel/sim/pick_place_task.hpp"
 
 namespace kestrel::sim {
 
@@ -120,6 +121,10 @@ void register_task_builtins(Registries& r) {
               "obstacle curriculum, success rate",
               [] { return navigation_task_config(); });
   register_locomotion_builtins(r);  // locomotion_task, its robot presets, legged_sim, legged_flat / legged_rough
+  r.tasks.add("so101_pick_place",
+              "LeIsaac's SO-101 pick-and-place (cube into box) over PickPlaceWorld: 31 obs, 6 joint targets (or 5 ee deltas, "
+              "task.pick_place.action_mode), shaped reward, success = cube in box and released, 20 s episodes",
+              [] { return pick_place_task_config(); });
   const CustomTaskSpec g = goal_box_through_gap_spec();
   r.tasks.add(g.id, g.description, [] { return custom_task_config(goal_box_through_gap_spec()); });
 }

@@ -11,6 +11,7 @@
 #include "kestrel/sim/custom_task.hpp"
 #include "kestrel/sim/locomotion_task.hpp"
 #include "kestrel/sim/navigation_task.hpp"
+#include "kestrel/sim/pick_place_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/simulator.hpp"
 
@@ -198,7 +199,7 @@ void min_pool_ranges(const real* ranges, int height, int width, real max_range_m
 }
 
 std::vector<std::string> rl_task_ids() {
-  std::vector<std::string> ids = {"locomotion_task", "navigation_task", "position_setpoint_task"};
+  std::vector<std::string> ids = {"locomotion_task", "navigation_task", "position_setpoint_task", "so101_pick_place"};
   for (const std::string& c : custom_tasks().names()) ids.push_back(c);
   std::sort(ids.begin(), ids.end());
   return ids;
@@ -212,7 +213,7 @@ std::string rl_task_ids_joined() {
 
 bool is_rl_task(const std::string& task_name) {
   return task_name == "position_setpoint_task" || task_name == "navigation_task" || task_name == "locomotion_task" ||
-         custom_tasks().has(task_name);
+         task_name == "so101_pick_place" || custom_tasks().has(task_name);
 }
 
 bool task_defaults(const std::string& task_name, TaskDefaults& out) {
@@ -226,6 +227,10 @@ bool task_defaults(const std::string& task_name, TaskDefaults& out) {
   }
   if (task_name == "locomotion_task") {
     out = locomotion_task_defaults();
+    return true;
+  }
+  if (task_name == "so101_pick_place") {  // its scene is task.pick_place's; the other sections are not read
+    out = TaskDefaults();
     return true;
   }
   CustomTaskSpec spec;
@@ -257,6 +262,14 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
     return make_navigation_task(config, p, backend, error);
   }
   if (id == "locomotion_task") return make_locomotion_task(config, backend, error);
+  if (id == "so101_pick_place") {
+    if (backend == Backend::planar) {
+      error = "simulator planar: task so101_pick_place runs its own articulated scene (the SO-101 arm, cube and box); "
+              "use simulator: rigid";
+      return nullptr;
+    }
+    return make_pick_place_task(config, error);
+  }
   if (custom_tasks().has(id)) {
     CustomTaskSpec spec;
     custom_tasks().make(id, spec);

@@ -351,6 +351,45 @@ struct LocomotionConfig {
   real push_links_interval_s = 0;
 };
 
+/// so101_pick_place's action space (task.pick_place.action_mode).
+enum class PickPlaceActionMode : std::uint8_t {
+  joint_position = 0,  // 6 absolute joint targets (rad): LeIsaac's joint position action
+  ee_delta = 1,        // tool-centre-point delta x, y, z (m), yaw delta (rad), gripper target (rad): teleoperation
+};
+
+/// so101_pick_place (sim/pick_place_task.hpp, task.pick_place): the scene's parameters (the
+/// defaults are sim/pick_place.hpp's PickPlaceConfig), the action mode and the shaped reward's
+/// weights. The episode length is task.episode_len_env_steps (1000 = 20 s at the 50 Hz action rate).
+struct PickPlaceTaskConfig {
+  PickPlaceActionMode action_mode = PickPlaceActionMode::joint_position;
+  // physics
+  real dt_s = 0.005_r;
+  int decimation = 4;
+  int solver_iterations = 60;
+  real arm_kp_Nm_rad = 998.22_r, arm_kd_Nms_rad = 2.73_r;
+  real gripper_kp_Nm_rad = 20, gripper_kd_Nms_rad = 0.5_r;
+  // objects
+  real cube_half_m = 0.0125_r, cube_mass_kg = 0.011_r, cube_friction = 1;
+  Vec3 cube_pos_w = Vec3(0.20_r, 0, 0);
+  Vec3 box_pos_w = Vec3(0.20_r, 0.15_r, 0);
+  real box_friction = 0.6_r, table_friction = 0.5_r;
+  real randomize_xy_m = 0.05_r;
+  real success_xy_m = 0.05_r, success_height_m = 0.10_r;
+  // success: cube_in_box with the pads' force on the cube below release_force_N, held this many
+  // consecutive action steps
+  int success_hold_steps = 10;
+  real release_force_N = 0.1_r;
+  // ee_delta: per-action clips of the deltas
+  real ee_max_delta_m = 0.02_r;
+  real ee_max_yaw_delta_rad = 0.2_r;
+  // shaped reward (per action step): reach, grasp, lift, place, success (see pick_place_task.hpp)
+  real reach_weight = 1, reach_scale_m = 0.05_r;
+  real grasp_weight = 1, grasp_force_N = 0.5_r;
+  real lift_weight = 2, lift_height_m = 0.05_r;
+  real place_weight = 2, place_scale_m = 0.05_r;
+  real success_reward = 50;
+};
+
 struct TaskConfig {
   std::string name = "position_setpoint";
   TaskKind kind = TaskKind::position_setpoint;
@@ -376,6 +415,7 @@ struct TaskConfig {
   CurriculumConfig curriculum;  // read by the tasks with a curriculum (navigation_task)
   NavigationConfig navigation;  // read by navigation_task
   LocomotionConfig locomotion;  // read by locomotion_task
+  PickPlaceTaskConfig pick_place;  // read by so101_pick_place
   PositionSetpointRewardParams reward;  // read by position_setpoint_task (navigation_task: navigation.reward)
 };
 constexpr int kMaxPlacementAttempts = 64;  // candidates live on the stack of reset_env

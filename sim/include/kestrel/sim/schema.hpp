@@ -106,6 +106,7 @@ const Schema<NavigationConfig>& navigation_schema();
 const Schema<NavigationRewardParams>& navigation_reward_schema();
 const Schema<LocomotionConfig>& locomotion_schema();
 const Schema<LocomotionRewardScales>& locomotion_scales_schema();
+const Schema<PickPlaceTaskConfig>& pick_place_schema();
 const Schema<PositionSetpointRewardParams>& position_setpoint_reward_schema();
 const Schema<RaySensorFields>& lidar_sensor_schema();   // lidar and ToF presets
 const Schema<RaySensorFields>& camera_sensor_schema();  // depth cameras

@@ -73,6 +73,14 @@ class Task {
   /// False (nothing written) when the task has none for its controller configuration.
   virtual bool scripted_actions(float* actions) const = 0;
 
+  /// The box the task clamps each action component to (action_dim values each), where the task
+  /// has per-component bounds (so101_pick_place: the joint ranges); false (nothing written) for
+  /// tasks whose bounds are one number for every component (kestrel.vector_env's _action_bound).
+  virtual bool action_bounds(float* low, float* high) const {
+    (void)low, (void)high;
+    return false;
+  }
+
   const float* observations() const { return obs_.data(); }
   const float* rewards() const { return rewards_.data(); }
   const std::uint8_t* terminations() const { return terminations_.data(); }
