@@ -32,6 +32,8 @@
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/robots/multirotor.hpp"
 #include "kestrel/sim/limits.hpp"
+#include "kestrel/sim/pick_place_camera.hpp"
+#include "kestrel/sim/pick_place_task.hpp"
 #include "kestrel/sim/registry.hpp"
 #include "kestrel/sim/rigid_backend.hpp"
 #include "kestrel/sim/scenario.hpp"
@@ -152,6 +154,16 @@ struct KTask {
   std::size_t od() const { return static_cast<std::size_t>(task->obs_dim()); }
   std::size_t ad() const { return static_cast<std::size_t>(task->action_dim()); }
 };
+
+/// so101_pick_place's world of environment env (a clear error for any other task or env).
+const ks::PickPlaceWorld* pick_place_env(KTask& p, int env) {
+  if (env < 0 || env >= p.t().num_envs())
+    throw nb::value_error(("env: expected 0.." + std::to_string(p.t().num_envs() - 1) + " (got " + std::to_string(env) + ")").c_str());
+  const ks::PickPlaceWorld* w = ks::pick_place_world(p.t(), env);
+  if (w == nullptr)
+    throw nb::value_error(("task " + std::string(p.t().name()) + ": cameras and the scene state are so101_pick_place's").c_str());
+  return w;
+}
 
 std::unique_ptr<KTask> make_task(const KConfig& c, const std::string& backend) {
   if (!ks::is_rl_task(c.cfg.task.name))
@@ -875,7 +887,87 @@ NB_MODULE(_core, m) {
                                         .c_str());
             return Array2<float>(buf, {p.n(), p.ad()}, owner);
           },
-          "The task's built-in scripted controller's actions for the current state (what `kestrel run` drives).");
+          "The task's built-in scripted controller's actions for the current state (what `kestrel run` drives).")
+      .def(
+          "render_camera",
+          [](KTask& p, int env, const std::string& camera, int width, int height) {
+            const ks::PickPlaceWorld* w = pick_place_env(p, env);
+            ks::CameraSpec cam;
+            if (camera == "front") cam = ks::front_camera(width, height);
+            else if (camera == "wrist") cam = ks::wrist_camera(*w, width, height);
+            else throw nb::value_error(("camera: expected \"front\" or \"wrist\" (got \"" + camera + "\")").c_str());
+            if (width < 1 || height < 1 || width > 2048 || height > 2048)
+              throw nb::value_error("width, height: expected 1..2048 pixels");
+            const std::size_t px = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+            auto* rgb = new std::uint8_t[3 * px]();
+            auto* depth = new float[px]();
+            auto* seg = new std::uint8_t[px]();
+            nb::capsule o_rgb(rgb, [](void* q) noexcept { delete[] static_cast<std::uint8_t*>(q); });
+            nb::capsule o_depth(depth, [](void* q) noexcept { delete[] static_cast<float*>(q); });
+            nb::capsule o_seg(seg, [](void* q) noexcept { delete[] static_cast<std::uint8_t*>(q); });
+            kestrel::Status st;
+            {
+              nb::gil_scoped_release release;
+              st = ks::render_camera(*w, cam, rgb, depth, seg);
+            }
+            if (st != kestrel::Status::ok) throw nb::value_error(("render_camera: " + std::string(kestrel::to_string(st))).c_str());
+            const std::size_t h = static_cast<std::size_t>(height), wd = static_cast<std::size_t>(width);
+            return nb::make_tuple(nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>>(rgb, {h, wd, 3}, o_rgb),
+                                  nb::ndarray<nb::numpy, float, nb::ndim<2>>(depth, {h, wd}, o_depth),
+                                  nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<2>>(seg, {h, wd}, o_seg));
+          },
+          "env"_a, "camera"_a = "front", "width"_a = 640, "height"_a = 480,
+          "so101_pick_place only: environment env's image from the front or wrist camera "
+          "(sim/pick_place_camera.hpp): (rgb uint8 (h, w, 3), depth float32 (h, w) metres along the optical axis, "
+          "+inf where nothing is hit, segmentation uint8 (h, w): 0 table, 1 robot, 2 cube, 3 box, 255 nothing).")
+      .def(
+          "pick_place_state",
+          [](KTask& p, int env) {
+            const ks::PickPlaceWorld* w = pick_place_env(p, env);
+            const ks::PickPlaceState& st = w->state();
+            auto v3 = [](const kestrel::Vec3& v) { return std::vector<double>{v[0], v[1], v[2]}; };
+            nb::dict d;
+            d["tcp_pos_w"] = v3(st.tcp_pos_w);
+            std::vector<double> R;
+            for (int r = 0; r < 3; ++r)
+              for (int c = 0; c < 3; ++c) R.push_back(st.tcp_R_w(r, c));
+            d["tcp_R_w"] = R;
+            d["cube_pos_w"] = v3(st.cube_pos_w);
+            d["cube_quat_xyzw"] = std::vector<double>{st.cube_quat_xyzw[0], st.cube_quat_xyzw[1], st.cube_quat_xyzw[2], st.cube_quat_xyzw[3]};
+            d["box_pos_w"] = v3(st.box_pos_w);
+            d["grip_force_N"] = static_cast<double>(w->grip_force_N());
+            d["cube_in_box"] = w->cube_in_box();
+            d["joint_pos"] = std::vector<double>(w->joint_pos(), w->joint_pos() + ks::PickPlaceWorld::kJoints);
+            d["joint_targets"] = std::vector<double>(w->joint_targets(), w->joint_targets() + ks::PickPlaceWorld::kJoints);
+            // Every collision shape at the current state, for viewers: entity, type, size, centre and
+            // rotation (shape -> world, row-major) in the world.
+            ks::PickPlaceShape shapes[64];
+            const int n = std::min(64, w->scene_shapes(shapes, 64));
+            nb::list out;
+            const char* entity[] = {"table", "robot", "cube", "box"};
+            const char* type[] = {"sphere", "capsule", "box"};
+            for (int i = 0; i < n; ++i) {
+              const ks::PickPlaceShape& sh = shapes[i];
+              const kestrel::Mat3 Rw = sh.X_body.E.transpose() * sh.shape.R_b;
+              const kestrel::Vec3 cw = sh.X_body.r + sh.X_body.E.transpose() * sh.shape.p_b;
+              nb::dict e;
+              e["entity"] = entity[static_cast<int>(sh.entity)];
+              e["index"] = sh.index;
+              e["type"] = type[static_cast<int>(sh.shape.type)];
+              e["size"] = v3(sh.shape.size);
+              e["pos_w"] = v3(cw);
+              std::vector<double> Rs;
+              for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) Rs.push_back(Rw(r, c));
+              e["R_w"] = Rs;
+              out.append(e);
+            }
+            d["shapes"] = out;
+            return d;
+          },
+          "env"_a,
+          "so101_pick_place only: environment env's scene now: tool centre point, cube, box, grip force (N), "
+          "cube_in_box, joint positions and targets, and every collision shape in the world (for viewers).");
 
   nb::class_<KSimulator>(m, "Simulator", "The Simulator interface (sim/simulator.hpp) with its views as numpy arrays.")
       .def(
