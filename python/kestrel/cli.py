@@ -3,6 +3,8 @@
     kestrel train TASK --learner rsl_rl --envs 256 --seed 0 --out runs/ps   # kestrel.train
     kestrel export --rsl-rl CKPT ... --onnx policy.onnx --header policy.hpp  # kestrel.export
     kestrel view [SCENARIO] | --replay run.mcap; kestrel teleop [SCENARIO]   # kestrel.viewer
+    kestrel teleop --task Kestrel-SO101-PickPlace-v0 --device keyboard [--record DIR]   # kestrel.so101_teleop
+    kestrel replay DIR [--episode K]                                         # SO-101 episodes, bit for bit
     kestrel run SCENARIO --record run.mcap [--view]                          # kestrel.record
     kestrel sweep SCENARIO --grid KEY=V1,V2 --seeds 8 --address auto        # kestrel.cluster (Ray)
 
@@ -22,7 +24,9 @@ _COMMANDS = {
     "train": "train a policy with rsl_rl or Stable-Baselines3: progress bar, evaluations, checkpoints, TensorBoard, CSV, plot, ONNX",
     "export": "export a trained actor to a C++ header (firmware) and/or ONNX",
     "view": "the 3-D viewer in a browser page (viser): a live run, or --replay FILE with a time slider",
-    "teleop": "the viewer with robot 0 of env 0 driven from the page's keyboard and mouse",
+    "teleop": "the viewer with robot 0 of env 0 driven from the page's keyboard and mouse; SO-101 pick and place "
+              "(--task Kestrel-SO101-PickPlace-v0 --device keyboard|so101leader [--record DIR])",
+    "replay": "re-run recorded SO-101 episodes (a LeRobot dataset of kestrel teleop --record) and check them bit for bit",
     "plot": "draw a run's figures (trajectory.png, curves.png) from its CSVs with matplotlib",
     "run": "the C++ harness's `kestrel run`, then its trajectory plot (--no-plot: without; --record FILE / --view: through the bindings)",
     "sweep": "fan a scenario over a parameter grid / random draws and seeds on Ray (or this process): table, plot, combined hash",
@@ -50,6 +54,14 @@ def main(argv: list[str] | None = None) -> int:
         from .export import main as export_main
 
         return export_main(rest, prog="kestrel export")
+    if cmd == "teleop" and _so101_teleop(rest):
+        from .so101_teleop import teleop_main
+
+        return teleop_main(rest, prog="kestrel teleop")
+    if cmd == "replay":
+        from .so101_teleop import replay_main
+
+        return replay_main(rest, prog="kestrel replay")
     if cmd in ("view", "teleop"):
         from .viewer import view_main
 
@@ -72,9 +84,20 @@ def main(argv: list[str] | None = None) -> int:
         if cmd == "run":
             return _run_and_plot(cxx, rest)
         os.execv(cxx, [cxx, *argv])  # the C++ CLI: kestrel list / schema / ...
-    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export, view, teleop, plot, sweep)\n\n{_usage()}",
+    print(f"kestrel: unknown command {cmd!r} (this is the Python package's command: train, export, view, teleop, replay, plot, sweep)\n\n{_usage()}",
           file=sys.stderr)
     return 2
+
+
+def _so101_teleop(args: list[str]) -> bool:
+    """`kestrel teleop` of the SO-101 task (--device, or --task naming it) rather than the viewer's."""
+    for i, x in enumerate(args):
+        if x == "--device" or x.startswith("--device="):
+            return True
+        v = x.split("=", 1)[1] if x.startswith("--task=") else (args[i + 1] if x == "--task" and i + 1 < len(args) else None)
+        if v is not None and v in ("Kestrel-SO101-PickPlace-v0", "so101_pick_place"):
+            return True
+    return False
 
 
 def _run_and_plot(cxx: str, args: list[str]) -> int:

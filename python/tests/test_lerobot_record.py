@@ -15,47 +15,79 @@ TASK = "Pick the red cube and place it into the box"
 H, W = 12, 16
 
 
+class _Box:
+    def __init__(self, n):
+        self.shape = (n,)
+
+
+class _FakeTask:
+    def __init__(self, env, seed):
+        self.env, self.seed = env, seed
+
+    def render_camera(self, i, cam, width=640, height=480):
+        img = np.zeros((height, width, 3), np.uint8)
+        img[..., 0] = np.uint8(abs(float(self.env.q[i, 0])) * 100 % 255)
+        img[:, : self.env.t % width, 1] = 200
+        return (img if cam == "front" else 255 - img), None, None
+
+    def pick_place_state(self, i):
+        return {"cube_pos_w": [0.2, 0.0, float(self.env.q[i, 1])], "cube_quat_xyzw": [0, 0, 0, 1],
+                "tcp_pos_w": [0, 0, 0], "grip_force_N": 0.0, "cube_in_box": False}
+
+
 class FakeArmEnv:
-    """num_envs arms whose joints move a fixed fraction towards their targets each step (float32
-    arithmetic: deterministic), with two cameras rendering the joint state; 'ee' mode resolves a
-    fake IK (targets = joints + a fixed map of the deltas) and reports info['joint_targets']."""
+    """The SO-101 env's interface (kestrel.so101_teleop): (n, 31) observations with the joints in
+    0:6 and the applied joint targets in 12:18, the action mode fixed at construction ("joint": 6
+    targets, "ee": 5 deltas through a fake IK), a task with render_camera / pick_place_state, and
+    reset(seed) rebuilding only on a new seed. Joints move a fixed fraction towards their targets
+    each step (float32 arithmetic: deterministic); episodes are truncated after `horizon` steps."""
 
-    def __init__(self, num_envs=2, horizon=1000):
-        self.num_envs, self.horizon = num_envs, horizon
-        self.action_mode = "joint"
-        self.unwrapped = self
+    def __init__(self, num_envs=2, horizon=1000, mode="joint", seed=0):
+        self.num_envs, self.horizon, self.mode = num_envs, horizon, mode
+        self.single_action_space = _Box(5 if mode == "ee" else 6)
+        self._build(seed)
 
-    def set_action_mode(self, mode):
-        assert mode in ("joint", "ee")
-        self.action_mode = mode
+    def _build(self, seed):
+        self.task = _FakeTask(self, seed)
+        self.rng = np.random.default_rng(seed)
+        self._start()
+
+    def _start(self):
+        self.q = self.rng.uniform(-0.5, 0.5, (self.num_envs, 6)).astype(np.float32)
+        self.targets = self.q.copy()
+        self.t = 0
 
     def _obs(self):
-        img = np.zeros((self.num_envs, H, W, 3), np.uint8)
-        img[..., 0] = (np.abs(self.q[:, :1, None]) * 100 % 255).astype(np.uint8)
-        img[:, :, : self.t % W, 1] = 200
-        return {"joint_pos": self.q.copy(), "images": {"front": img, "wrist": 255 - img}}
+        o = np.zeros((self.num_envs, 31), np.float32)
+        o[:, 0:6], o[:, 12:18] = self.q, self.targets
+        return o
 
     def reset(self, seed=None):
-        rng = np.random.default_rng(seed)
-        self.q = rng.uniform(-0.5, 0.5, (self.num_envs, 6)).astype(np.float32)
-        self.t = 0
+        if seed is not None and seed != self.task.seed:
+            self._build(seed)
+        else:
+            self._start()
         return self._obs(), {}
 
     def step(self, action):
-        action = np.asarray(action)
-        info = {}
-        if self.action_mode == "ee":
-            m = np.float32(0.5) * np.ones((5, 6), np.float32)
-            target = (self.q + action.astype(np.float32) @ m).astype(np.float32)
+        action = np.asarray(action, np.float32)
+        if self.mode == "ee":
+            assert action.shape == (self.num_envs, 5)
+            target = (self.q + action @ (np.float32(0.5) * np.ones((5, 6), np.float32))).astype(np.float32)
             target[:, 5] = action[:, 4]
-            info["joint_targets"] = target.copy()
         else:
             assert action.shape == (self.num_envs, 6) and action.dtype == np.float32
-            target = action
+            target = action.copy()
+        self.targets = target
         self.q = (self.q + np.float32(0.3) * (target - self.q)).astype(np.float32)
         self.t += 1
         done = np.full(self.num_envs, self.t >= self.horizon)
-        return self._obs(), np.zeros(self.num_envs), np.zeros(self.num_envs, bool), done, info
+        obs, info = self._obs(), {}
+        if done.any():
+            info = {"final_obs": obs.copy(), "_final_obs": done.copy()}
+            self._start()
+            obs = self._obs()
+        return obs, np.zeros(self.num_envs), np.zeros(self.num_envs, bool), done, info
 
 
 class ScriptedLeader:
@@ -166,24 +198,42 @@ def test_dataset_refusals(tmp_path):
 
 
 def test_teleop_records_and_replay_is_bit_exact(tmp_path):
-    env = FakeArmEnv(num_envs=2, horizon=9)
+    env = FakeArmEnv(num_envs=2, horizon=9, mode="joint")
     w = rec.LeRobotWriter.create(tmp_path / "ds", cameras={"front": (H, W), "wrist": (H, W)})
-    stats = tel.teleop_loop(env, ScriptedLeader(), steps=20, recorder=w, seed=3)
-    assert stats["saved"] == 2 and stats["frames"] == 20  # episodes of 9 + 9 frames (+2 unsaved)
+    # Episodes that end by the time limit (truncated) are not demonstrations: a success reset (N) saves.
+    dev = ScriptedLeader()
+    stats = tel.teleop_loop(env, dev, steps=20, recorder=w, seed=3)
+    assert stats["saved"] == 0 and stats["discarded"] == 2 and stats["timeouts"] == 2 and stats["frames"] == 20
+
+    class Saving(ScriptedLeader):
+        def __init__(self):
+            super().__init__()
+            self.reset_request = None
+
+        def take_reset(self):
+            r = "success" if self.k and self.k % 7 == 0 and self.reset_request != self.k else None
+            if r:
+                self.reset_request = self.k
+            return r
+
+    assert w.episode_frames == 2  # the third episode's frames, until a reset
+    w.clear_episode()
+    stats = tel.teleop_loop(env, Saving(), steps=16, recorder=w, seed=3)
+    assert stats["saved"] == 2 and stats["frames"] == 14
     ds = rec.LeRobotEpisodes(tmp_path / "ds")
-    assert [e["length"] for e in ds.episodes] == [9, 9]
+    assert [e["length"] for e in ds.episodes] == [7, 7]
     assert [e["kestrel/seed"] for e in ds.episodes] == [3, 4]
     for ep in range(2):
-        states = rec.replay(FakeArmEnv(num_envs=2, horizon=9), tmp_path / "ds", ep)
+        states = rec.replay(FakeArmEnv(num_envs=2, horizon=9, mode="joint"), tmp_path / "ds", ep)
         assert states.tobytes() == ds.episode(ep)["observation.state"].tobytes()
 
 
 def test_keyboard_teleop_in_ee_mode(tmp_path):
-    env = FakeArmEnv(num_envs=1, horizon=1000)
+    env = FakeArmEnv(num_envs=1, horizon=1000, mode="ee")
     kb = tel.KeyboardTeleop()
     w = rec.LeRobotWriter.create(tmp_path / "ds", cameras={"front": (H, W), "wrist": (H, W)})
-    assert tel.teleop_loop(env, kb, steps=3, recorder=w, seed=0)["frames"] == 0  # not started: no frames
-    assert env.action_mode == "ee"
+    s = tel.teleop_loop(env, kb, steps=3, recorder=w, seed=0)
+    assert s["frames"] == 0 and s["steps"] == 0  # not started: no frames, the env is not stepped
     kb.press("B"); kb.press("W"); kb.press("O")
     kb.callbacks["N"] = lambda: None
     s = tel.teleop_loop(env, kb, steps=4, recorder=w, seed=0)
@@ -195,6 +245,9 @@ def test_keyboard_teleop_in_ee_mode(tmp_path):
     ds = rec.LeRobotEpisodes(tmp_path / "ds")
     e = ds.episode(0)
     assert e["action"].shape == (4, 6)  # the joint targets the env's IK resolved
+    assert np.all(np.diff(e["action"][:, 5]) <= 0) and e["action"][-1, 5] == pytest.approx(np.radians(-10))  # O closes
+    with pytest.raises(ValueError, match="'joint'-mode device on an env in the 'ee' action mode"):
+        tel.teleop_loop(env, ScriptedLeader(), steps=1)
 
 
 def test_lerobot_reads_the_dataset(tmp_path):
