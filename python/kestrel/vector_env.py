@@ -289,9 +289,19 @@ def _make(task_id: str, defaults: dict, num_envs: int | None = 1024, seed: int =
     return KestrelVectorEnv(task_id=task_id, num_envs=num_envs, seed=seed, threads=threads, **over)
 
 
-def make_vec(id: str, num_envs: int = 1024, seed: int = 0, threads: int | None = None, **overrides: Any) -> KestrelVectorEnv:
+def make_vec(id: str, num_envs: int = 1024, seed: int = 0, threads: int | None = None, scene: Any = None,
+             **overrides: Any) -> KestrelVectorEnv:
     """A Kestrel vector env by gymnasium id (GYM_IDS) or task id (kestrel.task_ids()), with section
-    overrides (controller=..., env={...}, task={...}, scenario=..., backend=...)."""
+    overrides (controller=..., env={...}, task={...}, scenario=..., backend=...).
+
+    scene (so101_pick_place): a USD scene file (models/so101/pick_place_scene.usda and its kind)
+    mapped onto task.pick_place's scene keys by kestrel.pick_place_scene (the same as the override
+    task={"pick_place": {"scene_file": path}}); keys given in task={"pick_place": {...}} win."""
+    if scene is not None:
+        if overrides.get("scenario") is not None and not isinstance(overrides["scenario"], dict):
+            raise ValueError("scene: give it with section overrides or a dict scenario, not a scenario file or text "
+                             "(or write task.pick_place.scene_file in a dict)")
+        overrides = kestrel._merge({"task": {"pick_place": {"scene_file": os.fspath(scene)}}}, overrides)
     if id in GYM_IDS:
         task_id, defaults = GYM_IDS[id]
     elif id in kestrel.task_ids():

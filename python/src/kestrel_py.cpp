@@ -32,6 +32,7 @@
 #include "kestrel/allocation/presets.hpp"
 #include "kestrel/robots/multirotor.hpp"
 #include "kestrel/sim/limits.hpp"
+#include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/pick_place_camera.hpp"
 #include "kestrel/sim/pick_place_task.hpp"
 #include "kestrel/sim/registry.hpp"
@@ -967,7 +968,93 @@ NB_MODULE(_core, m) {
           },
           "env"_a,
           "so101_pick_place only: environment env's scene now: tool centre point, cube, box, grip force (N), "
-          "cube_in_box, joint positions and targets, and every collision shape in the world (for viewers).");
+          "cube_in_box, joint positions and targets, and every collision shape in the world (for viewers).")
+      .def(
+          "pick_place_poses",
+          [](KTask& p) {
+            (void)pick_place_env(p, 0);
+            const std::size_t n = p.n();
+            nb::dict d;
+            // Copies (float64, C order) of every environment's state: each call allocates new arrays.
+            auto array = [&](const char* key, std::size_t cols, auto fill) {
+              auto* buf = new double[n * cols]();
+              nb::capsule owner(buf, [](void* q) noexcept { delete[] static_cast<double*>(q); });
+              for (std::size_t e = 0; e < n; ++e) fill(*ks::pick_place_world(p.t(), static_cast<int>(e)), buf + e * cols);
+              d[key] = Array2<double>(buf, {n, cols}, owner);
+            };
+            array("cube_pos_w", 3, [](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < 3; ++k) o[k] = w.state().cube_pos_w[k]; });
+            array("cube_quat_xyzw", 4, [](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < 4; ++k) o[k] = w.state().cube_quat_xyzw[k]; });
+            array("box_pos_w", 3, [](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < 3; ++k) o[k] = w.state().box_pos_w[k]; });
+            array("tcp_pos_w", 3, [](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < 3; ++k) o[k] = w.state().tcp_pos_w[k]; });
+            array("tcp_quat_xyzw", 4, [](const ks::PickPlaceWorld& w, double* o) {
+              kestrel::Vec4 q = kestrel::to_xyzw(kestrel::quat_from_rotation_matrix(w.state().tcp_R_w));
+              if (q[3] < 0) q = -q;
+              for (int k = 0; k < 4; ++k) o[k] = q[k];
+            });
+            const int J = ks::PickPlaceWorld::kJoints;
+            array("joint_pos", J, [J](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < J; ++k) o[k] = w.joint_pos()[k]; });
+            array("joint_vel", J, [J](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < J; ++k) o[k] = w.joint_vel()[k]; });
+            array("joint_targets", J, [J](const ks::PickPlaceWorld& w, double* o) { for (int k = 0; k < J; ++k) o[k] = w.joint_targets()[k]; });
+            array("grip_force_N", 1, [](const ks::PickPlaceWorld& w, double* o) { o[0] = w.grip_force_N(); });
+            auto* in_box = new bool[n]();
+            nb::capsule o_in(in_box, [](void* q) noexcept { delete[] static_cast<bool*>(q); });
+            for (std::size_t e = 0; e < n; ++e) in_box[e] = ks::pick_place_world(p.t(), static_cast<int>(e))->cube_in_box();
+            d["cube_in_box"] = Array1<bool>(in_box, {n}, o_in);
+            return d;
+          },
+          "so101_pick_place only: every environment's scene state now as new float64 arrays (copies, not views: "
+          "read them again after a step): cube_pos_w (n, 3), cube_quat_xyzw (n, 4), box_pos_w (n, 3; the centre of "
+          "the box floor's bottom face), tcp_pos_w (n, 3), tcp_quat_xyzw (n, 4, w >= 0), joint_pos, joint_vel, "
+          "joint_targets (n, 6), grip_force_N (n, 1), and cube_in_box (n,) bool (LeIsaac's term, the C++ one).")
+      .def(
+          "set_object_pose",
+          [](KTask& p, int env, const std::string& object, const std::vector<double>& pos, const std::vector<double>& quat) {
+            (void)pick_place_env(p, env);
+            ks::PickPlaceObject obj;
+            if (object == "cube") obj = ks::PickPlaceObject::cube;
+            else if (object == "box") obj = ks::PickPlaceObject::box;
+            else throw nb::value_error(("object: expected \"cube\" or \"box\" (got \"" + object + "\")").c_str());
+            if (pos.size() != 3) throw nb::value_error(("pos: expected 3 numbers (x, y, z in m), got " + std::to_string(pos.size())).c_str());
+            if (quat.size() != 4)
+              throw nb::value_error(("quat: expected 4 numbers (x, y, z, w), got " + std::to_string(quat.size())).c_str());
+            std::string err;
+            if (!ks::pick_place_set_object_pose(p.t(), env, obj, kestrel::Vec3(static_cast<real>(pos[0]), static_cast<real>(pos[1]), static_cast<real>(pos[2])),
+                                                kestrel::Vec4(static_cast<real>(quat[0]), static_cast<real>(quat[1]), static_cast<real>(quat[2]),
+                                                              static_cast<real>(quat[3])),
+                                                err))
+              throw nb::value_error(("set_object_pose: " + err).c_str());
+          },
+          "env"_a, "object"_a, "pos"_a, "quat"_a = std::vector<double>{0, 0, 0, 1},
+          "so101_pick_place only, between steps: puts environment env's \"cube\" at pos (its centre, m) with "
+          "orientation quat (x, y, z, w; normalised), at rest, or the \"box\" at pos (its floor's bottom-face "
+          "centre; quat not read), as an event term does after a reset. The observation row, the views and the "
+          "scripted controller follow; the next reset draws the objects again.")
+      .def(
+          "pick_place_config",
+          [](KTask& p) {
+            const ks::PickPlaceConfig& c = pick_place_env(p, 0)->config();
+            auto v3 = [](const kestrel::Vec3& v) { return std::vector<double>{v[0], v[1], v[2]}; };
+            nb::dict d;
+            d["robot_file"] = c.robot_file;
+            d["dt_s"] = static_cast<double>(c.dt_s);
+            d["decimation"] = c.decimation;
+            d["cube_half_m"] = static_cast<double>(c.cube_half_m);
+            d["cube_mass_kg"] = static_cast<double>(c.cube_mass_kg);
+            d["cube_friction"] = static_cast<double>(c.cube_friction);
+            d["cube_pos_w"] = v3(c.cube_pos_w);
+            d["box_pos_w"] = v3(c.box_pos_w);
+            d["box_inner_half_m"] = static_cast<double>(c.box_inner_half_m);
+            d["box_wall_m"] = static_cast<double>(c.box_wall_m);
+            d["box_height_m"] = static_cast<double>(c.box_height_m);
+            d["box_friction"] = static_cast<double>(c.box_friction);
+            d["table_friction"] = static_cast<double>(c.table_friction);
+            d["randomize_xy_m"] = static_cast<double>(c.randomize_xy_m);
+            d["success_xy_m"] = static_cast<double>(c.success_xy_m);
+            d["success_height_m"] = static_cast<double>(c.success_height_m);
+            return d;
+          },
+          "so101_pick_place only: the scene the worlds were built from (sim/pick_place.hpp's PickPlaceConfig; "
+          "robot_file resolved): cube and box sizes, nominal positions, frictions, randomisation and success thresholds.");
 
   nb::class_<KSimulator>(m, "Simulator", "The Simulator interface (sim/simulator.hpp) with its views as numpy arrays.")
       .def(

@@ -521,6 +521,9 @@ const Schema<PickPlaceTaskConfig>& pick_place_schema() {
       real_f<S>("cube_friction", &S::cube_friction, "", 0, 10, "the cube's Coulomb friction coefficient"),
       vec3b_f<S>("cube_pos_w", &S::cube_pos_w, "m", -1, 1, "the cube's nominal centre x, y (z: resting on the table)"),
       vec3b_f<S>("box_pos_w", &S::box_pos_w, "m", -1, 1, "the box's nominal centre x, y (its floor's bottom face, z ignored)"),
+      real_f<S>("box_inner_half_m", &S::box_inner_half_m, "m", 1e-3, 0.5, "the box's inner half side (square, inside the walls)"),
+      real_f<S>("box_wall_m", &S::box_wall_m, "m", 1e-4, 0.1, "the thickness of the box's walls and floor"),
+      real_f<S>("box_height_m", &S::box_height_m, "m", 1e-3, 0.5, "the walls' height above the table"),
       real_f<S>("box_friction", &S::box_friction, "", 0, 10, "the box's friction coefficient"),
       real_f<S>("table_friction", &S::table_friction, "", 0, 10, "the table's friction coefficient"),
       real_f<S>("randomize_xy_m", &S::randomize_xy_m, "m", 0, 0.5, "cube and box drawn uniformly within +-this in x and y at each reset"),
@@ -542,6 +545,14 @@ const Schema<PickPlaceTaskConfig>& pick_place_schema() {
                 "reward place: weight x (1 - tanh(|cube - box|_xy / place_scale_m)) while grasped and lifted, or in the box"),
       real_f<S>("place_scale_m", &S::place_scale_m, "m", 1e-6, kBig, ""),
       real_f<S>("success_reward", &S::success_reward, "", -kBig, kBig, "reward success: added on the step that succeeds"),
+      choice_f<S>(
+          "robot_file", "a robot file path (MJCF or URDF with the SO-101's six joints)",
+          [](S& s, const std::string& v) {
+            s.robot_file = v;
+            return true;
+          },
+          [](const S& s) { return s.robot_file.c_str(); },
+          "the arm's robot file (absolute, or relative to the working directory); empty: models/so101/so101.xml"),
   };
   static const Schema<S> s{"task.pick_place", "so101_pick_place's scene (sim/pick_place.hpp), action mode, success rule and shaped reward",
                            f, std::size(f), nullptr, 0};

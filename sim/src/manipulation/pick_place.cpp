@@ -168,7 +168,17 @@ void PickPlaceWorld::reset() {
   // randomize_object_uniform: four draws always (the stream's position does not depend on values).
   const real r = cfg_.randomize_xy_m;
   const real cx = rng_.uniform(-r, r), cy = rng_.uniform(-r, r), bx = rng_.uniform(-r, r), by = rng_.uniform(-r, r);
-  const Vec3 box_c(cfg_.box_pos_w[0] + bx, cfg_.box_pos_w[1] + by, 0);
+  place_box(Vec3(cfg_.box_pos_w[0] + bx, cfg_.box_pos_w[1] + by, 0));
+  for (int j = 0; j < kJoints; ++j) {
+    q_[j] = target_[j] = home_[j];
+    qd_[j] = 0;
+  }
+  im.warm.count = 0;
+  set_cube_pose(Vec3(cfg_.cube_pos_w[0] + cx, cfg_.cube_pos_w[1] + cy, cfg_.cube_half_m), Vec4(0, 0, 0, 1));
+}
+
+void PickPlaceWorld::place_box(const Vec3& box_c) {
+  Impl& im = *impl_;
   const real in = cfg_.box_inner_half_m, w = cfg_.box_wall_m, h = cfg_.box_height_m;
   im.box[0].p_b = box_c + Vec3(0, 0, w / 2);
   im.box[0].size = Vec3(in + w, in + w, w / 2);
@@ -180,12 +190,13 @@ void PickPlaceWorld::reset() {
     im.box[3 + s].size = Vec3(in, w / 2, h / 2);
   }
   state_.box_pos_w = box_c;
-  for (int j = 0; j < kJoints; ++j) {
-    q_[j] = target_[j] = home_[j];
-    qd_[j] = 0;
-  }
-  im.warm.count = 0;
-  set_cube_pose(Vec3(cfg_.cube_pos_w[0] + cx, cfg_.cube_pos_w[1] + cy, cfg_.cube_half_m), Vec4(0, 0, 0, 1));
+}
+
+void PickPlaceWorld::set_box_position(const Vec3& p_w) {
+  if (!all_finite(p_w)) return;
+  place_box(p_w);
+  // The contacts against the box's parts were found at the old place: no warm start from them.
+  impl_->warm.count = 0;
 }
 
 void PickPlaceWorld::set_cube_pose(const Vec3& p_w, const Vec4& quat_xyzw) {

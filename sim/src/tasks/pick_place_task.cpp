@@ -38,7 +38,7 @@ class PickPlaceSimulator final : public Simulator {
     // see none here); the robot section of the scenario is not read.
     c.robot.kind = robots::RobotKind::articulated;
     c.robot.name = "so101";
-    c.robot.model_file = models_dir() + "/so101/so101.xml";
+    c.robot.model_file = c.task.pick_place.robot_file.empty() ? models_dir() + "/so101/so101.xml" : c.task.pick_place.robot_file;
     c.robot.sensors.clear();
     c.sim.dt_s = c.task.pick_place.dt_s;
     allocate_views(c, kJ, 0);
@@ -77,6 +77,8 @@ class PickPlaceSimulator final : public Simulator {
   }
 
   PickPlaceWorld& world(int env) { return *worlds_[static_cast<std::size_t>(env)]; }
+  /// The views of env after its world was changed from outside a step (an object moved).
+  void refresh_env(int env) { refresh(env); }
   const PickPlaceWorld& world(int env) const { return *worlds_[static_cast<std::size_t>(env)]; }
 
   /// Runs fn(ctx, env) for every environment, slices of environments on the pool's workers.
@@ -319,6 +321,20 @@ class PickPlaceTask final : public Task {
 
   const PickPlaceWorld& world(int env) const { return ps_->world(env); }
 
+  // An object of env moved between steps (an event term): the views, the observation row, the
+  // scripted controller (it plans from the objects' positions) and the success counter follow.
+  void set_object_pose(int env, bool cube, const Vec3& p_w, const Vec4& quat_xyzw) {
+    const std::size_t i = static_cast<std::size_t>(env);
+    PickPlaceWorld& w = ps_->world(env);
+    if (cube) w.set_cube_pose(p_w, quat_xyzw);
+    else w.set_box_position(p_w);
+    ps_->refresh_env(env);
+    hold_[i] = 0;
+    scripted_fresh_[i] = 0;
+    scripts_[i]->reset();
+    write_obs(env);
+  }
+
  protected:
   void on_reset(int env) override {
     const std::size_t i = static_cast<std::size_t>(env);
@@ -451,6 +467,10 @@ PickPlaceConfig pick_place_world_config(const PickPlaceTaskConfig& t) {
   c.cube_friction = t.cube_friction;
   c.cube_pos_w = Vec3(t.cube_pos_w[0], t.cube_pos_w[1], 0);
   c.box_pos_w = Vec3(t.box_pos_w[0], t.box_pos_w[1], 0);
+  c.box_inner_half_m = t.box_inner_half_m;
+  c.box_wall_m = t.box_wall_m;
+  c.box_height_m = t.box_height_m;
+  c.robot_file = t.robot_file;
   c.box_friction = t.box_friction;
   c.table_friction = t.table_friction;
   c.randomize_xy_m = t.randomize_xy_m;
@@ -486,6 +506,28 @@ TaskConfig pick_place_task_config() {
   t.kind = TaskKind::hover;               // not read: the task's own rules end its episodes
   t.episode_len_env_steps = 1000;         // 20 s at the 50 Hz action rate
   return t;
+}
+
+bool pick_place_set_object_pose(Task& task, int env, PickPlaceObject object, const Vec3& p_w, const Vec4& quat_xyzw,
+                                std::string& error) {
+  if (std::strcmp(task.name(), "so101_pick_place") != 0) {
+    error = std::string("task ") + task.name() + ": set_object_pose is so101_pick_place's";
+    return false;
+  }
+  if (env < 0 || env >= task.num_envs()) {
+    error = "env: expected 0.." + std::to_string(task.num_envs() - 1) + " (got " + std::to_string(env) + ")";
+    return false;
+  }
+  if (!all_finite(p_w) || !all_finite(quat_xyzw)) {
+    error = "pos, quat: expected finite numbers";
+    return false;
+  }
+  if (object == PickPlaceObject::cube && !(quat_xyzw.norm() > real(1e-6))) {
+    error = "quat: expected a non-zero quaternion (x, y, z, w)";
+    return false;
+  }
+  static_cast<PickPlaceTask&>(task).set_object_pose(env, object == PickPlaceObject::cube, p_w, quat_xyzw);
+  return true;
 }
 
 const PickPlaceWorld* pick_place_world(const Task& task, int env) {

@@ -273,3 +273,94 @@ TEST(PickPlaceTask, ScenarioKeysAndRegistry) {
   EXPECT_EQ(make_task(c, Backend::planar, err), nullptr);
   EXPECT_NE(err.find("rigid"), std::string::npos);
 }
+
+// PickPlaceWorld::set_box_position: the box's five parts move together (the world's shapes),
+// cube_in_box follows the box, the cube's state is left alone; and the task-level setter
+// (pick_place_set_object_pose) rewrites the observation row and refuses bad input.
+TEST(PickPlaceTask, SetBoxPositionMovesThePartsAndCubeInBoxFollows) {
+  WorldConfig c = config(1, 1, ", pick_place: {randomize_xy_m: 0}");
+  std::unique_ptr<Task> t = build(c);
+  PickPlaceWorld& w = world(*t, 0);
+  PickPlaceShape before[64], after[64];
+  const int n = w.scene_shapes(before, 64);
+  const Vec3 cube0 = w.state().cube_pos_w;
+  const std::uint64_t h0 = w.state_hash();
+  EXPECT_FALSE(w.cube_in_box());
+  const Vec3 d(-0.03_r, -0.12_r, 0);  // box centre (0.2, 0.15) -> (0.17, 0.03): the cube (0.2, 0) inside
+  w.set_box_position(w.state().box_pos_w + d);
+  ASSERT_EQ(w.scene_shapes(after, 64), n);
+  int box_parts = 0;
+  for (int i = 0; i < n; ++i) {
+    if (before[i].entity == PickPlaceEntity::box) {
+      ++box_parts;
+      EXPECT_NEAR((after[i].shape.p_b - before[i].shape.p_b - d).norm(), 0, 1e-6) << "part " << before[i].index;
+      EXPECT_NEAR((after[i].shape.size - before[i].shape.size).norm(), 0, 1e-9);
+    } else {
+      EXPECT_NEAR((after[i].shape.p_b - before[i].shape.p_b).norm(), 0, 1e-9);
+    }
+  }
+  EXPECT_EQ(box_parts, 5);
+  EXPECT_NEAR((w.state().box_pos_w - Vec3(0.17_r, 0.03_r, 0)).norm(), 0, 1e-6);
+  EXPECT_EQ(w.state_hash(), h0);  // q, qd (the arm and the cube) untouched
+  EXPECT_NEAR((w.state().cube_pos_w - cube0).norm(), 0, 0);
+  EXPECT_TRUE(w.cube_in_box());
+  w.set_box_position(Vec3(0.20_r, 0.15_r, 0));
+  EXPECT_FALSE(w.cube_in_box());
+  w.set_box_position(Vec3(std::nan(""), 0, 0));  // ignored
+  EXPECT_NEAR((w.state().box_pos_w - Vec3(0.20_r, 0.15_r, 0)).norm(), 0, 1e-9);
+
+  // The task's setter: the observation's box - cube (28..31) follows; the cube is set at rest.
+  std::string err;
+  ASSERT_TRUE(pick_place_set_object_pose(*t, 0, PickPlaceObject::box, Vec3(0.1_r, -0.2_r, 0), Vec4(0, 0, 0, 1), err)) << err;
+  ASSERT_TRUE(pick_place_set_object_pose(*t, 0, PickPlaceObject::cube, Vec3(0.12_r, -0.19_r, 0.0125_r), Vec4(0, 0, 0, 1), err)) << err;
+  const float* o = t->observations();
+  EXPECT_NEAR(o[28], -0.02f, 1e-5f);
+  EXPECT_NEAR(o[29], -0.01f, 1e-5f);
+  EXPECT_NEAR(o[30], -0.0125f, 1e-5f);
+  EXPECT_TRUE(w.cube_in_box());
+  EXPECT_FALSE(pick_place_set_object_pose(*t, 1, PickPlaceObject::box, Vec3::Zero(), Vec4(0, 0, 0, 1), err));
+  EXPECT_NE(err.find("env"), std::string::npos) << err;
+  EXPECT_FALSE(pick_place_set_object_pose(*t, 0, PickPlaceObject::cube, Vec3::Zero(), Vec4(0, 0, 0, 0), err));
+  EXPECT_NE(err.find("quat"), std::string::npos) << err;
+  // The box stays where it was put over steps; the cube, released in it, counts towards success:
+  // after success_hold_steps (10) actions the episode ends in success and the reset draws again.
+  std::vector<float> a = home_actions(*t);
+  for (int k = 0; k < 9; ++k) t->step(a.data());
+  EXPECT_NEAR((w.state().box_pos_w - Vec3(0.1_r, -0.2_r, 0)).norm(), 0, 1e-9);
+  EXPECT_EQ(t->infos().successes, 0u);
+  t->step(a.data());
+  EXPECT_EQ(t->infos().successes, 1u);
+  EXPECT_NEAR((w.state().box_pos_w - Vec3(0.2_r, 0.15_r, 0)).norm(), 0, 1e-9);
+}
+
+TEST(PickPlaceTask, BoxGeometryAndRobotFileKeys) {
+  WorldConfig c;
+  std::string err;
+  ASSERT_TRUE(load_scenario_string("task: {name: so101_pick_place, pick_place: {box_inner_half_m: 0.07, box_wall_m: 0.004,\n"
+                                   "  box_height_m: 0.05, robot_file: " KESTREL_MODELS_SO101_XML "}}\n",
+                                   "pp.yaml", c, err))
+      << err;
+  EXPECT_EQ(c.task.pick_place.box_inner_half_m, 0.07_r);
+  EXPECT_EQ(c.task.pick_place.box_wall_m, 0.004_r);
+  EXPECT_EQ(c.task.pick_place.box_height_m, 0.05_r);
+  EXPECT_EQ(c.task.pick_place.robot_file, KESTREL_MODELS_SO101_XML);
+  const PickPlaceConfig pc = pick_place_world_config(c.task.pick_place);
+  EXPECT_EQ(pc.box_inner_half_m, 0.07_r);
+  EXPECT_EQ(pc.box_wall_m, 0.004_r);
+  EXPECT_EQ(pc.box_height_m, 0.05_r);
+  EXPECT_EQ(pc.robot_file, KESTREL_MODELS_SO101_XML);
+  c.env.num_envs = 1;
+  std::unique_ptr<Task> t = build(c);
+  PickPlaceShape s[64];
+  const int n = world(*t, 0).scene_shapes(s, 64);
+  for (int i = 0; i < n; ++i)
+    if (s[i].entity == PickPlaceEntity::box && s[i].index == 2) {  // the +x wall
+      EXPECT_NEAR(s[i].shape.size[0], 0.002, 1e-7);
+      EXPECT_NEAR(s[i].shape.size[2], 0.025, 1e-7);
+      EXPECT_NEAR(s[i].shape.p_b[0] - world(*t, 0).state().box_pos_w[0], 0.072, 1e-6);
+    }
+  ASSERT_TRUE(load_scenario_string("task: {name: so101_pick_place, pick_place: {robot_file: /nonexistent/arm.xml}}\n", "pp.yaml", c, err));
+  c.env.num_envs = 1;
+  EXPECT_EQ(make_task(c, err), nullptr);
+  EXPECT_NE(err.find("/nonexistent/arm.xml"), std::string::npos) << err;
+}

@@ -372,7 +372,11 @@ struct PickPlaceTaskConfig {
   real cube_half_m = 0.0125_r, cube_mass_kg = 0.011_r, cube_friction = 1;
   Vec3 cube_pos_w = Vec3(0.20_r, 0, 0);
   Vec3 box_pos_w = Vec3(0.20_r, 0.15_r, 0);
+  real box_inner_half_m = 0.05_r, box_wall_m = 0.005_r, box_height_m = 0.04_r;
   real box_friction = 0.6_r, table_friction = 0.5_r;
+  // The arm's robot file ("" = models/so101/so101.xml); a USD scene's kestrel:robotFile
+  // (kestrel.pick_place_scene maps a scene file onto these keys).
+  std::string robot_file;
   real randomize_xy_m = 0.05_r;
   real success_xy_m = 0.05_r, success_height_m = 0.10_r;
   // success: cube_in_box with the pads' force on the cube below release_force_N, held this many

@@ -139,10 +139,16 @@ class PickPlaceWorld {
   int tcp_body() const { return tcp_body_; }
   /// Places the cube at p_w (centre) with orientation quat_xyzw, at rest: for tests.
   void set_cube_pose(const Vec3& p_w, const Vec4& quat_xyzw);
+  /// Moves the box (its floor and four walls together) so that its floor's bottom-face centre is
+  /// at p_w (z 0: standing on the table), as randomize_object_uniform does for the box; the cube,
+  /// the arm and their velocities are left alone (a cube inside the box stays where it is). A
+  /// non-finite p_w is ignored. state().box_pos_w and cube_in_box() follow at once.
+  void set_box_position(const Vec3& p_w);
   std::uint64_t state_hash() const;
 
  private:
   void refresh();
+  void place_box(const Vec3& box_c);
   struct Impl;
   PickPlaceConfig cfg_;
   ArticulatedRobot robot_;

@@ -84,4 +84,13 @@ PickPlaceConfig pick_place_world_config(const PickPlaceTaskConfig& c);
 /// viewers; env in [0, num_envs).
 const PickPlaceWorld* pick_place_world(const Task& task, int env);
 
+enum class PickPlaceObject : int { cube = 0, box = 1 };
+/// Moves environment env's cube (PickPlaceWorld::set_cube_pose: at rest) or box
+/// (PickPlaceWorld::set_box_position: quat_xyzw not read) between steps, as an event term of a
+/// Python scene task does after a reset: the Simulator's views, env's observation row, its scripted
+/// controller (restarted: it plans from the objects' positions) and its success counter follow.
+/// False and a message for another task, a bad env or non-finite numbers.
+bool pick_place_set_object_pose(Task& task, int env, PickPlaceObject object, const Vec3& p_w, const Vec4& quat_xyzw,
+                                std::string& error);
+
 }  // namespace kestrel::sim
