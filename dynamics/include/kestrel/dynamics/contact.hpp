@@ -83,6 +83,10 @@ struct ConstraintParams {
   real restitution_threshold_mps = real(0.5);  // slower impacts do not bounce
   real limit_margin = real(0.02);           // rad or m: a joint this close to a limit gets its row
   real regularization = real(1e-6);         // relative constraint force mixing on W's diagonal
+  // PGS's residual sums W_r . lambda serially (1) or in four partial sums (4): both deterministic,
+  // different bits; 4 is faster where rows are many (an arm holding a cube), 1 keeps the legged
+  // robots' frozen results.
+  int residual_lanes = 1;
 };
 
 enum class RowKind : std::uint8_t { normal = 0, tangent = 1, limit = 2, joint_friction = 3 };
@@ -367,8 +371,22 @@ template <int N, int C, int W = 1>
   // Projected Gauss-Seidel.
   auto residual = [&](int r) {
     real v = cd.b[r] - cd.target[r];
-    for (int c = 0; c < rows; ++c) v += cd.W[r][c] * cd.lambda[c];
-    return v;
+    if (p.residual_lanes != 4) {
+      for (int c = 0; c < rows; ++c) v += cd.W[r][c] * cd.lambda[c];
+      return v;
+    }
+    // Four partial sums, added pairwise at the end: a fixed order (the same bits on every target),
+    // but not the serial one, and four times shorter a chain of dependent additions.
+    real acc0 = 0, acc1 = 0, acc2 = 0, acc3 = 0;
+    int c = 0;
+    for (; c + 4 <= rows; c += 4) {
+      acc0 += cd.W[r][c] * cd.lambda[c];
+      acc1 += cd.W[r][c + 1] * cd.lambda[c + 1];
+      acc2 += cd.W[r][c + 2] * cd.lambda[c + 2];
+      acc3 += cd.W[r][c + 3] * cd.lambda[c + 3];
+    }
+    for (; c < rows; ++c) acc0 += cd.W[r][c] * cd.lambda[c];
+    return v + ((acc0 + acc1) + (acc2 + acc3));
   };
   if (warm != nullptr) {
     // Start from the previous step's impulses of the same rows (looked up by key; most rows keep
