@@ -62,7 +62,7 @@ import kestrel
 
 __all__ = ["SceneTask", "Term", "Scene"]
 
-_NEVER = 1 << 30  # C++ episode length / success hold: never reached inside a SceneTask
+_NEVER = 1 << 30  # C++ episode length: never reached inside a SceneTask (its success is off: end_on_success)
 
 
 @dataclass
@@ -205,7 +205,7 @@ class SceneTask(VectorEnv):
         if scene is not None:
             over = kestrel._merge({"task": {"pick_place": {"scene_file": str(scene)}}}, over)
         # The C++ task never ends an episode here: this env's terms and time limit do.
-        over = kestrel._merge(over, {"task": {"pick_place": {"success_hold_steps": 100000}}})
+        over = kestrel._merge(over, {"task": {"pick_place": {"end_on_success": False}}})
         self._task_id, self._over, self._threads, self._backend = task_id, over, threads, backend
         self.num_envs = int(num_envs)
         self._obs_terms = None if observations is None else {k: _term(k, v) for k, v in observations.items()}

@@ -532,6 +532,8 @@ const Schema<PickPlaceTaskConfig>& pick_place_schema() {
       int_f<S>("success_hold_steps", &S::success_hold_steps, 1, 100000, nullptr,
                "success (terminated): cube_in_box and released (pads' force < release_force_N) for this many consecutive actions"),
       real_f<S>("release_force_N", &S::release_force_N, "N", 0, kBig, "the pads' force on the cube below which it counts as released"),
+      bool_f<S>("end_on_success", &S::end_on_success,
+                "success ends the episode (terminated) with its bonus; false: the caller's own terms decide (kestrel.SceneTask)"),
       real_f<S>("ee_max_delta_m", &S::ee_max_delta_m, "m", 1e-5, 1, "ee_delta: each position delta clipped to +-this per action"),
       real_f<S>("ee_max_yaw_delta_rad", &S::ee_max_yaw_delta_rad, "rad", 0, 3.2, "ee_delta: the yaw delta clipped to +-this per action"),
       real_f<S>("reach_weight", &S::reach_weight, "", -kBig, kBig, "reward reach: weight x (1 - tanh(|cube - tcp| / reach_scale_m))"),

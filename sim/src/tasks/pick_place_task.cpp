@@ -284,7 +284,7 @@ class PickPlaceTask final : public Task {
       const bool in_box = w.cube_in_box();
       const bool released = w.grip_force_N() < c_.release_force_N;
       hold_[i] = in_box && released ? hold_[i] + 1 : 0;
-      const bool success = hold_[i] >= c_.success_hold_steps;
+      const bool success = c_.end_on_success && hold_[i] >= c_.success_hold_steps;
       const bool timeout = episode_step_[i] >= len_;
       float terms[kNumPickPlaceTerms];
       const float r = pick_place_reward(reward_inputs(w, in_box, success), c_, terms);

@@ -171,6 +171,26 @@ TEST(PickPlaceTask, SuccessTerminatesTruncationAtLength) {
   EXPECT_EQ(t->simulator().summary().successes, 1u);
 }
 
+// end_on_success: false (kestrel.SceneTask's setting): the same placement neither ends the
+// episode nor pays the bonus; the cube stays in the box.
+TEST(PickPlaceTask, SuccessOffLeavesTheEpisodeToTheCaller) {
+  WorldConfig c = config(1, 1, ", pick_place: {end_on_success: false}");
+  ASSERT_FALSE(c.task.pick_place.end_on_success);
+  auto t = build(c);
+  ASSERT_TRUE(t);
+  PickPlaceWorld& w = world(*t, 0);
+  const Vec3 b = w.state().box_pos_w;
+  w.set_cube_pose(Vec3(b[0], b[1], 0.005 + 0.0125), Vec4(0, 0, 0, 1));
+  std::vector<float> a = home_actions(*t);
+  for (int s = 1; s <= 20; ++s) {
+    t->step(a.data());
+    EXPECT_EQ(t->terminations()[0], 0) << s;
+    EXPECT_LT(t->rewards()[0], 50.0f) << s;
+  }
+  EXPECT_TRUE(world(*t, 0).cube_in_box());
+  EXPECT_EQ(t->infos().successes, 0u);
+}
+
 TEST(PickPlaceTask, ScriptedSucceedsAndThreadsAgree) {
   const int n = 4;
   std::unique_ptr<Task> t1 = build(config(n, 1)), t2 = build(config(n, 2));

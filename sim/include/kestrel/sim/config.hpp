@@ -383,6 +383,9 @@ struct PickPlaceTaskConfig {
   // consecutive action steps
   int success_hold_steps = 10;
   real release_force_N = 0.1_r;
+  // false: success neither ends nor pays (the bonus) an episode: a caller's own terms decide
+  // (kestrel.SceneTask, LeIsaac's way of writing terminations in Python)
+  bool end_on_success = true;
   // ee_delta: per-action clips of the deltas
   real ee_max_delta_m = 0.02_r;
   real ee_max_yaw_delta_rad = 0.2_r;

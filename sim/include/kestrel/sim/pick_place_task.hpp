@@ -38,7 +38,8 @@
 //   place   = place_weight (1 - tanh(|cube - box|_xy / place_scale_m))  while grasped and h > 1 cm, or in the box
 //   success = success_reward                                on the step that succeeds
 // Termination: success, i.e. LeIsaac's cube_in_box with the cube released (the pads' force below
-// release_force_N) for success_hold_steps consecutive actions (terminated; TaskInfos::successes);
+// release_force_N) for success_hold_steps consecutive actions (terminated; TaskInfos::successes;
+// task.pick_place.end_on_success false turns it off, bonus included, for callers with their own);
 // truncation at task.episode_len_env_steps (1000 = 20 s at 50 Hz). No failure termination.
 // scripted_actions(): ScriptedPickPlace per environment (restarted at every reset); idempotent
 // within a step (the script advances once per task step, whichever number of calls).
