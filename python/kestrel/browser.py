@@ -225,3 +225,23 @@ class HeadlessChromium:
                   windowsVirtualKeyCode=vk, nativeVirtualKeyCode=vk)
         self.call("Input.dispatchKeyEvent", type="keyUp", key=key, code=code, windowsVirtualKeyCode=vk,
                   nativeVirtualKeyCode=vk)
+
+
+def project_point(p_w, cam, look, fov_rad: float, width: int, height: int) -> tuple[float, float]:
+    """Pixel (u, v) of world point p_w through a z-up pinhole camera at cam looking at look with a
+    vertical field of view fov_rad (the viewer's camera model): where the browser tests look for a
+    drawn object's colour."""
+    import math
+
+    import numpy as np
+
+    f = np.asarray(look, float) - np.asarray(cam, float)
+    f /= np.linalg.norm(f)
+    r = np.cross(f, [0.0, 0.0, 1.0])
+    r /= np.linalg.norm(r)
+    up = np.cross(r, f)
+    d = np.asarray(p_w, float) - np.asarray(cam, float)
+    x, y, z = d @ r, d @ up, d @ f
+    assert z > 0, "point behind the camera"
+    focal = (height / 2) / math.tan(fov_rad / 2)
+    return width / 2 + focal * x / z, height / 2 - focal * y / z

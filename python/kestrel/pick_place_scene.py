@@ -101,6 +101,16 @@ def pick_place_keys_from_scene(scene: UsdScene) -> dict[str, Any]:
         hits = [e for e in ents.values() if e.name.lower() == name]
         return hits[0] if len(hits) == 1 else None
 
+    def named_or_only(name: str, candidates: list[Entity], expected: str) -> Entity:
+        """The entity called `name` (any case), else the one candidate; an error naming what was expected."""
+        e = by_name(name)
+        if e is not None:
+            return e
+        if len(candidates) != 1:
+            raise UsdSceneError(f"{f}: expected {expected}, got {len(candidates)}"
+                                + (f": {', '.join(c.path for c in candidates)}" if candidates else ""))
+        return candidates[0]
+
     def boxes(e: Entity, role: str) -> list[tuple[str, tuple, tuple]]:
         """(path, centre in the robot frame, half extents) of e's shapes: boxes, axis-aligned."""
         if not _identity(e.orientation):
@@ -117,12 +127,7 @@ def pick_place_keys_from_scene(scene: UsdScene) -> dict[str, Any]:
 
     # The cube: "Cube", else the only rigid entity.
     movable = [e for e in ents.values() if e.kind in ("rigid", "kinematic")]
-    cube = by_name("cube")
-    if cube is None:
-        if len(movable) != 1:
-            raise UsdSceneError(f"{f}: expected one movable object, the cube (an entity named Cube, or the only rigid "
-                                f"body), got {len(movable)}" + (f": {', '.join(e.path for e in movable)}" if movable else ""))
-        cube = movable[0]
+    cube = named_or_only("cube", movable, "one movable object, the cube (an entity named Cube, or the only rigid body)")
     if cube.kind != "rigid":
         raise err(cube.path, f"expected the cube to be a dynamic rigid body (PhysicsRigidBodyAPI), got kind {cube.kind}")
     others = [e for e in movable if e is not cube]
@@ -150,14 +155,8 @@ def pick_place_keys_from_scene(scene: UsdScene) -> dict[str, Any]:
 
     statics = [e for e in ents.values() if e.kind == "static"]
     # The box: "Box", else the static entity of five colliders.
-    box = by_name("box")
-    if box is None:
-        five = [e for e in statics if len(e.shapes) == 5]
-        if len(five) != 1:
-            raise UsdSceneError(f"{f}: expected the open box: an entity named Box, or the only static entity of five box "
-                                f"colliders (a floor and four walls), got {len(five)}"
-                                + (f": {', '.join(e.path for e in five)}" if five else ""))
-        box = five[0]
+    box = named_or_only("box", [e for e in statics if len(e.shapes) == 5],
+                        "the open box: an entity named Box, or the only static entity of five box colliders (a floor and four walls)")
     if box.kind != "static":
         raise err(box.path, f"expected the box to be static (colliders without a rigid body), got kind {box.kind}")
     if len(box.shapes) != 5:
@@ -211,13 +210,8 @@ def pick_place_keys_from_scene(scene: UsdScene) -> dict[str, Any]:
         raise err(box.path, "expected one friction (physics material) for the box's five parts")
 
     # The table: "Table", else the one other static entity.
-    table = by_name("table")
     rest = [e for e in statics if e is not box]
-    if table is None:
-        if len(rest) != 1:
-            raise UsdSceneError(f"{f}: expected the table: an entity named Table, or the only static entity besides the box, "
-                                f"got {len(rest)}" + (f": {', '.join(e.path for e in rest)}" if rest else ""))
-        table = rest[0]
+    table = named_or_only("table", rest, "the table: an entity named Table, or the only static entity besides the box")
     if table.kind != "static":
         raise err(table.path, f"expected the table to be static (a collider without a rigid body), got kind {table.kind}")
     extra = [e for e in rest if e is not table]

@@ -35,6 +35,16 @@ from gymnasium.vector.utils import batch_space
 import kestrel
 
 
+
+def final_obs_infos(obs: np.ndarray, done: np.ndarray, infos: dict) -> np.ndarray:
+    """Same-step autoreset's infos (as KestrelVectorEnv): ``final_obs`` holds the ended rows' last
+    observations (zeros elsewhere), ``_final_obs`` the mask. Returns the ended rows' indices."""
+    ids = np.flatnonzero(done)
+    final = np.zeros_like(obs)
+    final[ids] = obs[ids]
+    infos["final_obs"], infos["_final_obs"] = final, done.copy()
+    return ids
+
 class PythonTask:
     """Override observations, rewards and (optionally) terminations; all take the Simulator and
     return one row per robot (robots_per_env must be 1). Truncation is the scenario's
@@ -116,10 +126,7 @@ class PythonTaskVectorEnv(VectorEnv):
         infos: dict = {}
         done = terminated | truncated
         if done.any():
-            ids = np.flatnonzero(done)
-            final = np.zeros_like(obs)
-            final[ids] = obs[ids]
-            infos["final_obs"], infos["_final_obs"] = final, done.copy()
+            ids = final_obs_infos(obs, done, infos)
             self.sim.reset_idx(ids.tolist())
             self._steps[ids] = 0
             obs = self._obs()

@@ -59,6 +59,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 import kestrel
+from kestrel.python_task import final_obs_infos
 
 __all__ = ["SceneTask", "Term", "Scene"]
 
@@ -311,10 +312,7 @@ class SceneTask(VectorEnv):
         infos: dict = {}
         done = terminated | truncated
         if done.any():
-            ids = np.flatnonzero(done)
-            final = np.zeros_like(obs)
-            final[ids] = obs[ids]
-            infos["final_obs"], infos["_final_obs"] = final, done.copy()
+            ids = final_obs_infos(obs, done, infos)
             infos["terminations"] = fired
             self.task.reset_idx(ids.tolist())
             self.scene.invalidate()

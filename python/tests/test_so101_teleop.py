@@ -15,7 +15,7 @@ import pytest
 
 pytest.importorskip("pyarrow")
 from kestrel import feetech, lerobot_record as lr, so101_teleop as tel  # noqa: E402
-from kestrel.browser import HeadlessChromium, find_chromium  # noqa: E402
+from kestrel.browser import HeadlessChromium, find_chromium, project_point  # noqa: E402
 
 TASK = "Pick the red cube and place it into the box"
 
@@ -151,18 +151,6 @@ def is_robot(p):  # the viewer's orange under the page's lights
     return (r > 150) & (g > 30) & (g < 170) & (b < 90) & (r - g > 60)
 
 
-def project(p_w, cam, look, w, h, fov):
-    f = np.asarray(look, float) - cam
-    f /= np.linalg.norm(f)
-    r = np.cross(f, [0.0, 0.0, 1.0])
-    r /= np.linalg.norm(r)
-    u_ = np.cross(r, f)
-    d = np.asarray(p_w, float) - cam
-    x, y, z = d @ r, d @ u_, d @ f
-    focal = (h / 2) / math.tan(fov / 2)
-    return w / 2 + focal * x / z, h / 2 - focal * y / z
-
-
 @pytest.mark.skipif(find_chromium() is None, reason="no chromium (apt-get install chromium)")
 def test_browser_keys_drive_the_arm(tmp_path):
     from kestrel import so101_view
@@ -206,7 +194,7 @@ def test_browser_keys_drive_the_arm(tmp_path):
             s0 = state()
             assert not s0["started"] and s0["steps"] == 0
             # The arm is drawn where the world says: orange around the projected tcp and its wrist.
-            u, v = project(s0["tcp_pos_w"], cam, look, W, H, VIEW_FOV_RAD)
+            u, v = project_point(s0["tcp_pos_w"], cam, look, VIEW_FOV_RAD, W, H)
             mask = is_robot(img.astype(int))
             mask[:200, :330] = False  # the page's "software WebGL" notice
             mask[:, W - 340:] = False

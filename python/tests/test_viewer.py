@@ -20,7 +20,7 @@ import pytest
 
 import kestrel
 from kestrel import record, viewer
-from kestrel.browser import HeadlessChromium, find_chromium
+from kestrel.browser import HeadlessChromium, find_chromium, project_point
 
 needs_chromium = pytest.mark.skipif(find_chromium() is None, reason="no chromium (apt-get install chromium)")
 
@@ -36,17 +36,8 @@ SCENE = {
 
 
 def project(p_w, cam, look, fov=viewer.VIEW_FOV_RAD, w=W, h=H):
-    """Pixel (u, v) of world point p_w through a z-up pinhole camera at cam looking at look."""
-    f = np.asarray(look, float) - cam
-    f /= np.linalg.norm(f)
-    r = np.cross(f, [0.0, 0.0, 1.0])
-    r /= np.linalg.norm(r)
-    u_ = np.cross(r, f)
-    d = np.asarray(p_w, float) - cam
-    x, y, z = d @ r, d @ u_, d @ f
-    assert z > 0, "point behind the camera"
-    focal = (h / 2) / math.tan(fov / 2)
-    return w / 2 + focal * x / z, h / 2 - focal * y / z
+    """Pixel (u, v) of world point p_w through the viewer's camera at cam looking at look."""
+    return project_point(p_w, cam, look, fov, w, h)
 
 
 def colour_count(img, uv, rgb_test, radius=5):

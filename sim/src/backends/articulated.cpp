@@ -31,6 +31,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/simulator.hpp"
+#include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/thread_pool.hpp"
 
@@ -342,17 +343,10 @@ class ArticulatedSimulator final : public Simulator {
   }
   std::uint64_t state_hash() const override {
     // FNV-1a over every environment's configuration and velocities, in environment order.
-    std::uint64_t h = 1469598103934665603ull;
-    auto mix = [&h](const void* p, std::size_t bytes) {
-      const unsigned char* b = static_cast<const unsigned char*>(p);
-      for (std::size_t i = 0; i < bytes; ++i) {
-        h ^= b[i];
-        h *= 1099511628211ull;
-      }
-    };
-    mix(q_.data(), q_.size() * sizeof(real));
-    mix(qd_.data(), qd_.size() * sizeof(real));
-    return h;
+    Fnv1a f;
+    f.bytes(q_.data(), q_.size() * sizeof(real));
+    f.bytes(qd_.data(), qd_.size() * sizeof(real));
+    return f.h;
   }
 
   /// The per-physics-step work of one environment (workers run slices of environments).

@@ -67,6 +67,7 @@
 #include "kestrel/sim/limits.hpp"
 #include "kestrel/sim/robot_model.hpp"
 #include "kestrel/sim/simulator.hpp"
+#include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/thread_pool.hpp"
 
 namespace kestrel::sim {
@@ -526,14 +527,8 @@ class PlanarSimulator final : public Simulator {
   }
 
   std::uint64_t state_hash() const override {
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64 (Fowler, Noll, Vo), as World::state_hash
-    auto bytes = [&h](const void* p, std::size_t n) {
-      const unsigned char* c = static_cast<const unsigned char*>(p);
-      for (std::size_t k = 0; k < n; ++k) {
-        h ^= c[k];
-        h *= 1099511628211ull;
-      }
-    };
+    Fnv1a f;  // as World::state_hash
+    auto bytes = [&f](const void* p, std::size_t n) { f.bytes(p, n); };
     for (int ei = 0; ei < num_envs_; ++ei) {
       const Env& ev = envs_[static_cast<std::size_t>(ei)];
       for (int r = 0; r < robots_per_env_; ++r) {
@@ -559,7 +554,7 @@ class PlanarSimulator final : public Simulator {
       bytes(&ev.stats.resets, sizeof(ev.stats.resets));
       bytes(&ev.stats.crashes, sizeof(ev.stats.crashes));
     }
-    return h;
+    return f.h;
   }
 
   static void trampoline(void* ctx, int worker) { static_cast<PlanarSimulator*>(ctx)->run_slice(worker); }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/terrain.hpp"
 
 namespace kestrel::sim {
@@ -109,18 +110,9 @@ WorldSummary World::summary() const {
 }
 
 namespace {
-struct Fnv {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64 offset basis (Fowler, Noll, Vo)
-  void bytes(const void* p, std::size_t n) {
-    const unsigned char* c = static_cast<const unsigned char*>(p);
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= c[i];
-      h *= 1099511628211ull;
-    }
-  }
+/// The shared FNV-1a plus the World's own shorthand for a 3-vector.
+struct Fnv : Fnv1a {
   void v3(const Vec3& v) { bytes(v.data(), sizeof(real) * 3); }
-  template <class T>
-  void pod(const T& v) { bytes(&v, sizeof(T)); }
 };
 }  // namespace
 

@@ -129,7 +129,10 @@ void print_plot_hint(const std::string& out_dir) {
               out_dir.c_str());
 }
 
-bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {
+namespace {
+/// One PNG of H rows of row_bytes each (bit_depth and color_type as libpng's IHDR).
+bool write_png(const std::string& path, int W, int H, int bit_depth, int color_type, std::size_t row_bytes, const unsigned char* data,
+               std::string& error) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr) {
     error = path + ": cannot write";
@@ -144,14 +147,29 @@ bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* r
     return false;
   }
   png_init_io(png, f);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(W), static_cast<png_uint_32>(H), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+  png_set_IHDR(png, info, static_cast<png_uint_32>(W), static_cast<png_uint_32>(H), bit_depth, color_type, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
-  for (int y = 0; y < H; ++y) png_write_row(png, const_cast<png_bytep>(&rgb[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) * 3]));
+  for (int y = 0; y < H; ++y) png_write_row(png, const_cast<png_bytep>(&data[static_cast<std::size_t>(y) * row_bytes]));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   std::fclose(f);
   return true;
+}
+}  // namespace
+
+bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error) {
+  return write_png(path, W, H, 8, PNG_COLOR_TYPE_RGB, static_cast<std::size_t>(W) * 3, rgb, error);
+}
+
+bool write_png_gray16(const std::string& path, int W, int H, const std::uint16_t* values, std::string& error) {
+  const std::size_t count = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  std::vector<unsigned char> be(2 * count);  // PNG's 16-bit samples are big-endian
+  for (std::size_t i = 0; i < count; ++i) {
+    be[2 * i] = static_cast<unsigned char>(values[i] >> 8);
+    be[2 * i + 1] = static_cast<unsigned char>(values[i] & 0xff);
+  }
+  return write_png(path, W, H, 16, PNG_COLOR_TYPE_GRAY, static_cast<std::size_t>(W) * 2, be.data(), error);
 }
 
 bool write_sensor_pngs(const World& world, int env, const std::string& dir, std::vector<std::string>& written,

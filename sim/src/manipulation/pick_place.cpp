@@ -8,6 +8,7 @@
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/state_hash.hpp"
 
 namespace kestrel::sim {
 
@@ -327,17 +328,10 @@ real PickPlaceWorld::solve_tcp(const Vec3& p_w, real yaw_rad, const real* q_star
 }
 
 std::uint64_t PickPlaceWorld::state_hash() const {
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const void* ptr, std::size_t bytes) {
-    const unsigned char* b = static_cast<const unsigned char*>(ptr);
-    for (std::size_t i = 0; i < bytes; ++i) {
-      h ^= b[i];
-      h *= 1099511628211ull;
-    }
-  };
-  mix(q_, sizeof(q_));
-  mix(qd_, sizeof(qd_));
-  return h;
+  Fnv1a f;
+  f.bytes(q_, sizeof(q_));
+  f.bytes(qd_, sizeof(qd_));
+  return f.h;
 }
 
 // ----------------------------------------------------------------------------------------------

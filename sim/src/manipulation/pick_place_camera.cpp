@@ -1,8 +1,6 @@
 // Cameras of the SO-101 pick-and-place scene (sim/pick_place_camera.hpp).
 #include "kestrel/sim/pick_place_camera.hpp"
 
-#include <png.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -293,7 +291,7 @@ bool write_camera_pngs(const std::string& rgb_path, const std::string& depth_pat
   if (!rgb_path.empty() && !write_png_rgb(rgb_path, width, height, rgb, error)) return false;
   if (depth_path.empty()) return true;
   const std::size_t count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  std::vector<png_byte> mm(2 * count);  // big-endian 16-bit samples (PNG's byte order)
+  std::vector<std::uint16_t> mm(count);  // millimetres, rounded; 0: no hit
   for (std::size_t i = 0; i < count; ++i) {
     const float d = depth_m[i];
     std::uint16_t v = 0;
@@ -301,31 +299,9 @@ bool write_camera_pngs(const std::string& rgb_path, const std::string& depth_pat
       const double m = std::floor(static_cast<double>(d) * 1000.0 + 0.5);
       v = m >= 65535 ? std::uint16_t(65535) : static_cast<std::uint16_t>(m);
     }
-    mm[2 * i] = static_cast<png_byte>(v >> 8);
-    mm[2 * i + 1] = static_cast<png_byte>(v & 0xff);
+    mm[i] = v;
   }
-  std::FILE* f = std::fopen(depth_path.c_str(), "wb");
-  if (f == nullptr) {
-    error = depth_path + ": cannot write";
-    return false;
-  }
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png_create_info_struct(png);
-  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    std::fclose(f);
-    error = depth_path + ": PNG encoding failed";
-    return false;
-  }
-  png_init_io(png, f);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 16, PNG_COLOR_TYPE_GRAY,
-               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(png, info);
-  for (int y = 0; y < height; ++y) png_write_row(png, &mm[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) * 2]);
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
-  std::fclose(f);
-  return true;
+  return write_png_gray16(depth_path, width, height, mm.data(), error);
 }
 
 }  // namespace kestrel::sim

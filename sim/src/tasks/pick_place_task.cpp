@@ -10,6 +10,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/schema.hpp"
+#include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/summary.hpp"
 #include "kestrel/sim/thread_pool.hpp"
 
@@ -146,15 +147,9 @@ class PickPlaceSimulator final : public Simulator {
   }
   std::uint64_t state_hash() const override {
     // FNV-1a over the environments' hashes, in environment order.
-    std::uint64_t h = 1469598103934665603ull;
-    for (const auto& w : worlds_) {
-      const std::uint64_t x = w->state_hash();
-      for (int b = 0; b < 8; ++b) {
-        h ^= (x >> (8 * b)) & 0xffu;
-        h *= 1099511628211ull;
-      }
-    }
-    return h;
+    Fnv1a f;
+    for (const auto& w : worlds_) f.u64_le(w->state_hash());
+    return f.h;
   }
 
  protected:

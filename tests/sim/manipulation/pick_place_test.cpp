@@ -175,7 +175,8 @@ TEST(PickPlace, AStepNeitherAllocatesNorAcceptsNonFiniteTargets) {
   a[2] = NAN;
   ASSERT_EQ(w.step(a), Status::ok);
   EXPECT_EQ(w.joint_targets()[2], before);  // a non-finite target holds the previous one
-  for (int j = 0; j < 6 + 7; ++j) EXPECT_TRUE(std::isfinite(w.joint_pos()[j < 6 ? j : 0]));
+  for (int j = 0; j < PickPlaceWorld::kJoints; ++j) EXPECT_TRUE(std::isfinite(w.joint_pos()[j])) << j;
+  EXPECT_TRUE(all_finite(w.state().cube_pos_w));
   // A bad configuration is refused with the field's name.
   PickPlaceConfig bad;
   bad.cube_half_m = -1;

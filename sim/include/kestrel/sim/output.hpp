@@ -27,6 +27,8 @@ namespace kestrel::sim {
 
 /// RGB image (W x H, row-major, 3 bytes per pixel) as an 8-bit PNG.
 [[nodiscard]] bool write_png_rgb(const std::string& path, int W, int H, const unsigned char* rgb, std::string& error);
+/// A 16-bit grey PNG of W x H values (row-major), e.g. depth in millimetres.
+[[nodiscard]] bool write_png_gray16(const std::string& path, int W, int H, const std::uint16_t* values, std::string& error);
 /// For every ray sensor of robot 0 of environment `env`: dir/sensor_<name>_range.png (lidar, or a
 /// camera without depth) or _depth.png (depth camera), grey = value / max_range, and
 /// dir/sensor_<name>_segmentation.png (colour per id). Paths written are appended to `written`.
