@@ -52,6 +52,8 @@ constexpr double kTorch4096EnvStepsPerS = 1.1e6;
 constexpr double kTorch1EnvStepsPerS = 840;
 // Issue targets (bench, not tests).
 constexpr double kTargetEmpty4096x2 = 20e6;
+// Issue 18's goal for the 2-core machine: 4096 environments on 2 threads.
+constexpr double kTargetEmpty4096x2Issue18 = 50e6;
 constexpr double kTargetObstacles4096x2 = 1e6;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -232,7 +234,7 @@ void bench_split(const Options& o) {
   record("split_motor_model", n, 1, 1e9 / ns_motor, "ns/env-step of the stage alone");
   record("split_rigid_body", n, 1, 1e9 / ns_dyn, "ns/env-step of the stage alone");
 
-  // The same stages through the batched twin (sim/batch_step.hpp: kLanes robots per call, the path
+  // The same stages through the batched twin (sim/batch_step.hpp: batch::lanes() robots per call, the path
   // World::step takes for this robot), on fresh robots so both splits start from the same states.
   Robots b = make_robots(s, n);
   batch::Models m;
@@ -249,16 +251,16 @@ void bench_split(const Options& o) {
     std::printf("  (batched twin not eligible for this build: skipped)\n");
     return;
   }
-  constexpr int kL = batch::kLanes;
-  const int groups = n / kL;
+  const int group_lanes = batch::lanes();
+  const int groups = n / group_lanes;
   std::vector<Vec3> zero3(static_cast<std::size_t>(n), Vec3::Zero());
   struct Group {
-    batch::Lane l[kL];
+    batch::Lane l[batch::kMaxLanes];
   };
   std::vector<Group> lanes(static_cast<std::size_t>(groups));
   for (int g = 0; g < groups; ++g)
-    for (int l = 0; l < kL; ++l) {
-      const int i = g * kL + l;
+    for (int l = 0; l < group_lanes; ++l) {
+      const int i = g * group_lanes + l;
       batch::Lane& ln = lanes[static_cast<std::size_t>(g)].l[l];
       ln.state = &b.state[i];
       ln.ctrl = &b.ctrl[i];
@@ -269,19 +271,19 @@ void bench_split(const Options& o) {
       ln.contact_torque_b = &zero3[i];
     }
   struct GroupIo {
-    real wrench[6][kL];
-    real thrust[4][kL];
-    real body[6][kL];
+    real wrench[6][batch::kMaxLanes];
+    real thrust[4][batch::kMaxLanes];
+    real body[6][batch::kMaxLanes];
   };
   std::vector<GroupIo> io(static_cast<std::size_t>(groups));
-  auto lane_ref = [&](int g) -> const batch::Lane(&)[kL] { return lanes[static_cast<std::size_t>(g)].l; };
+  auto lane_ref = [&](int g) -> const batch::Lane* { return lanes[static_cast<std::size_t>(g)].l; };
   auto bstage = [&](auto&& body) {
     std::vector<double> ns;
     for (int rep = 0; rep < o.reps; ++rep) {
       const auto t0 = Clock::now();
       for (int j = 0; j < k; ++j)
         for (int g = 0; g < groups; ++g) body(g);
-      ns.push_back(seconds_since(t0) * 1e9 / (static_cast<double>(k) * groups * kL));
+      ns.push_back(seconds_since(t0) * 1e9 / (static_cast<double>(k) * groups * group_lanes));
     }
     return median(ns);
   };
@@ -296,7 +298,7 @@ void bench_split(const Options& o) {
   });
   const double b_dyn = bstage([&](int g) { batch::rigid_body_stage(m, lane_ref(g), io[static_cast<std::size_t>(g)].body); });
   const double b_total = b_ctrl + b_alloc + b_motor + b_dyn;
-  std::printf("\nThe same stages through the batched twin (%d robots per call, the path World::step takes):\n", kL);
+  std::printf("\nThe same stages through the batched twin (%s, the path World::step takes):\n", batch::kernel_name());
   std::printf("  controller (lee_position)          %7.1f ns  (%4.1f%%)\n", b_ctrl, 100 * b_ctrl / b_total);
   std::printf("  allocation (sequential desat.)     %7.1f ns  (%4.1f%%)\n", b_alloc, 100 * b_alloc / b_total);
   std::printf("  motor model (RK4) + wrench A f      %7.1f ns  (%4.1f%%)\n", b_motor, 100 * b_motor / b_total);
@@ -475,6 +477,27 @@ int main(int argc, char** argv) {
     std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- scalar robot step (set_batched(false)), for comparison\n", big, s1,
                 s2, 1e9 / s1, 1e9 / s2);
   }
+  {
+    // The kernel copies side by side (issue 18): the same worlds with the 4-lane (SSE2), 8-lane
+    // (AVX2) and 16-lane (AVX-512) robot step, each that this CPU runs; same bits.
+    std::printf("  kernel copies at %d envs (same bits; 1 thr / 2 thr env-steps/s):\n", big);
+    double base1 = 0, base2 = 0;
+    for (batch::KernelCopy c : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512}) {
+      if (!batch::use_kernel(c)) continue;
+      const double k1 = time_world(o, "empty", big, 1), k2 = time_world(o, "empty", big, 2);
+      const int nl = batch::lanes();
+      if (c == batch::KernelCopy::baseline) base1 = k1, base2 = k2;
+      const std::string name = std::string("empty_lanes_") + std::to_string(nl);
+      record(name, big, 1, k1, batch::kernel_name());
+      record(name, big, 2, k2, batch::kernel_name());
+      std::printf("    %-24s %12.4g %12.4g  (%.2fx / %.2fx the 4-lane copy)\n", batch::kernel_name(), k1, k2, k1 / base1, k2 / base2);
+      if (c != batch::KernelCopy::baseline) {
+        record("ratio_lanes_" + std::to_string(nl) + "_vs_4", big, 1, k1 / base1, "ratio (not a rate), same run");
+        record("ratio_lanes_" + std::to_string(nl) + "_vs_4", big, 2, k2 / base2, "ratio (not a rate), same run");
+      }
+    }
+    batch::use_default_kernel();
+  }
   const double one_env_us = 1e6 / r1[0];
   std::size_t i_big = 0;
   for (std::size_t i = 0; i < sizes.size(); ++i)
@@ -520,6 +543,8 @@ int main(int argc, char** argv) {
               r1[0], kTorch1EnvStepsPerS, r1[0] / kTorch1EnvStepsPerS, one_env_us, one_env_us < 1 ? "met" : "NOT met");
   std::printf("  env_with_obstacles %d envs, 2 threads: %.4g env-steps/s -> %.1fx torch (target >= %.3g: %s)\n", big, obst,
               obst / kTorch4096EnvStepsPerS, kTargetObstacles4096x2, obst >= kTargetObstacles4096x2 ? "met" : "NOT met");
+  std::printf("  %d envs, 2 threads: %.4g env-steps/s (issue 18 target on 2 cores: >= %.3g: %s)\n", big, r2[i_big],
+              kTargetEmpty4096x2Issue18, r2[i_big] >= kTargetEmpty4096x2Issue18 ? "met" : "NOT met");
   record("ratio_vs_torch_4096x2", big, 2, r2[i_big] / kTorch4096EnvStepsPerS, "ratio (not a rate)");
   record("ratio_vs_torch_1env", 1, 1, r1[0] / kTorch1EnvStepsPerS, "ratio (not a rate)");
 

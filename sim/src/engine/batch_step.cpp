@@ -1,5 +1,6 @@
 // Batched twin of the per-robot physics step; see batch_step.hpp for the contract. The kernel is in
-// batch_kernel.inc (compiled twice here: baseline and AVX2, chosen at run time); each block there
+// batch_kernel.inc (compiled three times here: baseline 4 lanes, AVX2 8, AVX-512 16; chosen at run
+// time); each block there
 // names the scalar function it mirrors; the operation order is that function's (Eigen
 // expressions resolved to the order Eigen 3.4 evaluates them: Vec3 reductions a0 + (a1 + a2),
 // Vec4 reductions (a0 + a2) + (a1 + a3) on SSE, cross products and Quaternion::_transformVector
@@ -8,12 +9,13 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #include "kestrel/kernel/math.hpp"
 
 #if defined(__SSE__) && !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
-#include <xmmintrin.h>
+#include <immintrin.h>
 #define KESTREL_BATCH_SSE 1
 #endif
 
@@ -21,8 +23,8 @@ namespace kestrel::sim::batch {
 
 namespace al = kestrel::allocation;
 
-// Baseline copy of the kernel (SSE2: every x86-64; plain C++ element loops elsewhere). In the
-// double build the lanes are 32-byte vectors passed between the kernel's own inline helpers
+// Baseline copy of the kernel (SSE2: every x86-64; plain C++ element loops elsewhere), 4 lanes. In
+// the double build the lanes are 32-byte vectors passed between the kernel's own inline helpers
 // (GCC's -Wpsabi note about their calling convention does not concern them); eligible() is false
 // there, so World never uses this copy.
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
@@ -30,34 +32,73 @@ namespace al = kestrel::allocation;
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 namespace base {
+constexpr int kLanes = 4;
+#define KESTREL_BATCH_LANES 4
 #include "batch_kernel.inc"
+#undef KESTREL_BATCH_LANES
 }  // namespace base
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
 #pragma GCC diagnostic pop
 #endif
 
 #if defined(KESTREL_BATCH_SSE) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define KESTREL_BATCH_AVX2 1
-// The same kernel compiled for AVX2 machines. Every header is included above, so only the
-// kernel's own functions get the target; the core functions it calls are the baseline ones.
+#define KESTREL_BATCH_WIDE 1
+// The same kernel for AVX2 machines, 8 lanes in 256-bit registers, and for AVX-512 machines, 16
+// lanes in 512-bit registers. Every header is included above, so only the kernel's own functions
+// get the target; the core functions it calls (the scalar fallbacks) are the baseline ones.
+// GCC's -Wpsabi note (a 32- or 64-byte vector passed by value changes ABI with the target) does
+// not concern these functions: they call only each other, all compiled for the same target.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
 #pragma GCC push_options
 #pragma GCC target("avx2")
 namespace avx2 {
+constexpr int kLanes = 8;
+#define KESTREL_BATCH_LANES 8
 #include "batch_kernel.inc"
+#undef KESTREL_BATCH_LANES
 }  // namespace avx2
 #pragma GCC pop_options
+// GCC 12's _mm512_undefined_ps (a self-initialised variable, by design) trips -Wuninitialized
+// inside the extract and sqrt intrinsics: a false positive of the header, not of this code.
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512dq")
+namespace avx512 {
+constexpr int kLanes = 16;
+#define KESTREL_BATCH_LANES 16
+#include "batch_kernel.inc"
+#undef KESTREL_BATCH_LANES
+}  // namespace avx512
+#pragma GCC pop_options
+#pragma GCC diagnostic pop
 #endif
 
 namespace {
-bool g_force_baseline = false;  // set by tests only, before stepping
-// Chosen per call (a load and a test of libgcc's CPU model, initialised before main).
-inline bool have_avx2() {
-#ifdef KESTREL_BATCH_AVX2
-  return !g_force_baseline && __builtin_cpu_supports("avx2");
-#else
-  return false;
+// The widest copy this CPU and build run (libgcc's CPU model, which checks the OS saves the wide
+// registers too).
+KernelCopy widest_copy() {
+#ifdef KESTREL_BATCH_WIDE
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq")) return KernelCopy::avx512;
+  if (__builtin_cpu_supports("avx2")) return KernelCopy::avx2;
 #endif
+  return KernelCopy::baseline;
 }
+// The start-up choice: the widest copy, or a narrower one KESTREL_BATCH_KERNEL asks for.
+KernelCopy default_copy() {
+  const KernelCopy widest = widest_copy();
+  const char* e = std::getenv("KESTREL_BATCH_KERNEL");
+  if (e == nullptr) return widest;
+  KernelCopy want = widest;
+  if (std::strcmp(e, "baseline") == 0 || std::strcmp(e, "sse2") == 0) want = KernelCopy::baseline;
+  if (std::strcmp(e, "avx2") == 0) want = KernelCopy::avx2;
+  if (std::strcmp(e, "avx512") == 0) want = KernelCopy::avx512;
+  return static_cast<int>(want) <= static_cast<int>(widest) ? want : widest;
+}
+const KernelCopy g_default = default_copy();
+KernelCopy g_copy = g_default;  // changed by use_kernel() only (tests, benches), before stepping
 }  // namespace
 
 // The kernel moves RigidBodyState as 13 packed floats (position, quaternion x y z w, linear
@@ -69,21 +110,37 @@ static bool state_layout_ok() {
          s.linvel_w.data() == b + 7 && s.angvel_b.data() == b + 10;
 }
 
-bool force_baseline_kernel(bool on) {
-  g_force_baseline = on;
-  return have_avx2();
+KernelCopy kernel_copy() { return g_copy; }
+
+bool use_kernel(KernelCopy c) {
+  if (static_cast<int>(c) > static_cast<int>(widest_copy())) return false;
+  g_copy = c;
+  return true;
+}
+
+void use_default_kernel() { g_copy = g_default; }
+
+int lanes() {
+  switch (g_copy) {
+    case KernelCopy::avx512: return 16;
+    case KernelCopy::avx2: return 8;
+    default: return 4;
+  }
 }
 
 const char* kernel_name() {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
   return "none (double build: scalar robot step)";
 #elif defined(KESTREL_BATCH_SSE)
-  return have_avx2() ? "AVX2 copy, 4 lanes" : "SSE2 copy, 4 lanes";
+  switch (g_copy) {
+    case KernelCopy::avx512: return "AVX-512 copy, 16 lanes";
+    case KernelCopy::avx2: return "AVX2 copy, 8 lanes";
+    default: return "SSE2 copy, 4 lanes";
+  }
 #else
   return "plain C++ copy, 4 lanes";
 #endif
 }
-
 
 bool eligible(const Models& m) {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
@@ -104,33 +161,35 @@ bool eligible(const Models& m) {
 #endif
 }
 
-#ifdef KESTREL_BATCH_AVX2
-#define KESTREL_BATCH_DISPATCH(call) \
-  do {                               \
-    if (have_avx2()) {               \
-      avx2::call;                    \
-    } else {                         \
-      base::call;                    \
-    }                                \
+#ifdef KESTREL_BATCH_WIDE
+#define KESTREL_BATCH_DISPATCH(call)         \
+  do {                                       \
+    switch (g_copy) {                        \
+      case KernelCopy::avx512: avx512::call; \
+        break;                               \
+      case KernelCopy::avx2: avx2::call;     \
+        break;                               \
+      default: base::call;                   \
+    }                                        \
   } while (false)
 #else
 #define KESTREL_BATCH_DISPATCH(call) base::call
 #endif
 
-void controller_stage(const Models& m, const Lane (&lanes)[kLanes], real (&wrench)[6][kLanes]) {
+void controller_stage(const Models& m, const Lane* lanes, real (&wrench)[6][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(controller_stage_k(m, lanes, wrench));
 }
-void allocation_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&wrench)[6][kLanes],
-                      real (&thrust)[4][kLanes]) {
+void allocation_stage(const Models& m, const Lane* lanes, const real (&wrench)[6][kMaxLanes],
+                      real (&thrust)[4][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(allocation_stage_k(m, lanes, wrench, thrust));
 }
-void motor_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&thrust)[4][kLanes],
-                 real (&body_wrench)[6][kLanes]) {
+void motor_stage(const Models& m, const Lane* lanes, const real (&thrust)[4][kMaxLanes],
+                 real (&body_wrench)[6][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(motor_stage_k(m, lanes, thrust, body_wrench));
 }
-void rigid_body_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&body_wrench)[6][kLanes]) {
+void rigid_body_stage(const Models& m, const Lane* lanes, const real (&body_wrench)[6][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(rigid_body_stage_k(m, lanes, body_wrench));
 }
-void robot_step(const Models& m, const Lane (&lanes)[kLanes]) { KESTREL_BATCH_DISPATCH(robot_step_k(m, lanes)); }
+void robot_step(const Models& m, const Lane* lanes) { KESTREL_BATCH_DISPATCH(robot_step_k(m, lanes)); }
 
 }  // namespace kestrel::sim::batch

@@ -1,4 +1,4 @@
-// The rigid World's batched path: groups of batch::kLanes consecutive environments step their
+// The rigid World's batched path: groups of batch::lanes() (4, 8 or 16) consecutive environments step their
 // robots through the batched twin of stage::robot_dynamics (sim/batch_step.hpp) in lockstep; the
 // rest of each env-step (setpoints, IMUs, obstacles, collision, statistics, resets, sensors) is the
 // scalar stages of step.cpp, run per environment in the same order as env_step. Environments never
@@ -23,9 +23,11 @@ inline void prefetch(const T* p) {
   __builtin_prefetch(c + sizeof(T) - 1, 1);
 }
 
-void robot_dynamics_batch(const WorldModel& m, WorldData& d, int env0, unsigned new_action_mask, const batch::Models& models) {
-  batch::Lane lanes[batch::kLanes];
-  for (int l = 0; l < batch::kLanes; ++l) {
+// `lanes` is the caller's scratch (num_lanes entries), every field rewritten here: an array of
+// batch::Lane declared per call would be zero-filled per call (its members have initialisers).
+void robot_dynamics_batch(const WorldModel& m, WorldData& d, int env0, int num_lanes, unsigned new_action_mask,
+                          const batch::Models& models, batch::Lane* lanes) {
+  for (int l = 0; l < num_lanes; ++l) {
     const std::size_t i = m.index(env0 + l, 0);
     real* applied = &d.applied_actions[i * kMaxActionDim];
     if ((new_action_mask >> l) & 1u) std::memcpy(applied, &d.actions[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
@@ -50,13 +52,14 @@ bool batch_eligible(const WorldModel& m) {
 }
 
 int env_steps_batched(const WorldModel& m, WorldData& d, int begin, int end) {
-  constexpr int kL = batch::kLanes;
-  constexpr int kAhead = 2 * kL;  // prefetch distance: two groups (~a microsecond of work)
+  const int group = batch::lanes();
+  const int ahead = group > 4 ? group : 2 * group;  // prefetch distance: 8-16 robots (~a microsecond of work)
   const batch::Models models = batch::models_of(m.mr, m.body, m.cfg.sim.dt_s, m.cfg.sim.substeps);
+  batch::Lane lanes[batch::kMaxLanes];
   int env = begin;
-  for (; env + kL <= end; env += kL) {
-    for (int l = 0; l < kL && env + kAhead + l < end; ++l) {
-      const std::size_t i = m.index(env + kAhead + l, 0);
+  for (; env + group <= end; env += group) {
+    for (int l = 0; l < group && env + ahead + l < end; ++l) {
+      const std::size_t i = m.index(env + ahead + l, 0);
       prefetch(&d.mr_state[i].motors);
       prefetch(&d.mr_state[i].ctrl.lee);
       prefetch(&d.mr_state[i].allocator);
@@ -66,26 +69,26 @@ int env_steps_batched(const WorldModel& m, WorldData& d, int begin, int end) {
     // num_physics_steps_per_env_step_std > 0); the latency may differ per lane.
     const int n = d.phys_steps[env];
     bool same = true;
-    for (int l = 1; l < kL; ++l) same = same && d.phys_steps[env + l] == n;
+    for (int l = 1; l < group; ++l) same = same && d.phys_steps[env + l] == n;
     if (!same) {
-      for (int l = 0; l < kL; ++l) env_step(m, d, env + l);
+      for (int l = 0; l < group; ++l) env_step(m, d, env + l);
       continue;
     }
-    for (int l = 0; l < kL; ++l) env_step_begin(m, d, env + l);
+    for (int l = 0; l < group; ++l) env_step_begin(m, d, env + l);
     for (int s = 0; s < n; ++s) {
       unsigned new_action = 0;
-      Vec3 v0[kL];
-      for (int l = 0; l < kL; ++l) {
+      Vec3 v0[batch::kMaxLanes];
+      for (int l = 0; l < group; ++l) {
         if (s == d.latency[env + l]) new_action |= 1u << l;
         v0[l] = d.state[m.index(env + l, 0)].linvel_w;
       }
-      robot_dynamics_batch(m, d, env, new_action, models);
-      for (int l = 0; l < kL; ++l) {
+      robot_dynamics_batch(m, d, env, group, new_action, models, lanes);
+      for (int l = 0; l < group; ++l) {
         if (m.any_imu) update_imus(m, d, env + l, 0, v0[l]);
         physics_step_tail(m, d, env + l);
       }
     }
-    for (int l = 0; l < kL; ++l) env_step_end(m, d, env + l);
+    for (int l = 0; l < group; ++l) env_step_end(m, d, env + l);
   }
   return env;
 }

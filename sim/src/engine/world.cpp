@@ -11,7 +11,7 @@
 namespace kestrel::sim {
 
 namespace {
-constexpr int kHookChunkEnvs = 64;  // a multiple of batch::kLanes; ~40 KB of robot rows
+constexpr int kHookChunkEnvs = 64;  // a multiple of every batch::lanes(); ~40 KB of robot rows
 void world_task(void* context, int worker) { static_cast<World*>(context)->run_slice(worker); }
 }  // namespace
 
@@ -59,7 +59,7 @@ void World::run_slice(int worker) {
     const int chunk = hook ? kHookChunkEnvs : end - begin;
     for (int b = begin; b < end; b += chunk) {
       const int e = std::min(end, b + chunk);
-      // Batched twin (step_batched.cpp): whole groups of batch::kLanes environments, bit-identical.
+      // Batched twin (step_batched.cpp): whole groups of batch::lanes() environments, bit-identical.
       int env = batch_ ? stage::env_steps_batched(model_, data_, b, e) : b;
       for (; env < e; ++env) stage::env_step(model_, data_, env);
       if (hook) after_step_(after_step_context_, b, e);

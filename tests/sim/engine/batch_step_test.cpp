@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -184,16 +185,17 @@ void run_twin(bool rps, bool drag, int substeps) {
   const real dt = 0.01_r;
   const batch::Models m = s.models(dt, substeps);
   ASSERT_TRUE(batch::eligible(m));
-  constexpr int kRobots = 4 * 60;
+  constexpr int kRobots = 16 * 15;  // whole groups of 4, 8 and 16
   std::vector<Robot> a, b;
   RngStream rng(11, 0, kPurposeReset);
   for (int k = 0; k < kRobots; ++k) a.push_back(random_robot(s, rng, k));
   b = a;
   const Vec3 p10 = a[10].state.position_w;
   for (int step = 0; step < 150; ++step) {
-    for (int g = 0; g < kRobots; g += batch::kLanes) {
-      batch::Lane lanes[batch::kLanes];
-      for (int l = 0; l < batch::kLanes; ++l) {
+    const int group = batch::lanes();
+    for (int g = 0; g < kRobots; g += group) {
+      batch::Lane lanes[batch::kMaxLanes];
+      for (int l = 0; l < group; ++l) {
         Robot& r = a[static_cast<std::size_t>(g + l)];
         lanes[l].state = &r.state;
         lanes[l].ctrl = &r.ctrl;
@@ -240,15 +242,34 @@ std::unique_ptr<World> build(const WorldConfig& c, bool batched) {
 
 }  // namespace
 
+// Every copy of the kernel this CPU runs (baseline 4 lanes, AVX2 8, AVX-512 16), each made the one
+// in use in turn; the default copy is restored afterwards.
+std::vector<batch::KernelCopy> runnable_copies() {
+  std::vector<batch::KernelCopy> v;
+  for (batch::KernelCopy c : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512})
+    if (batch::use_kernel(c)) v.push_back(c);
+  batch::use_default_kernel();
+  return v;
+}
+
 TEST(SimBatchStep, BitEqualToScalarRotorSpeedMotors) { run_twin(true, false, 1); }
 TEST(SimBatchStep, BitEqualToScalarThrustStateMotorsWithDragAndSubsteps) { run_twin(false, true, 3); }
-// The baseline (SSE2) copy of the kernel, where the AVX2 copy is the one in use by default.
-TEST(SimBatchStep, BaselineKernelBitEqualToScalar) {
-  const bool avx2 = batch::force_baseline_kernel(true);
-  EXPECT_FALSE(avx2);
-  run_twin(true, false, 1);
-  run_twin(false, true, 2);
-  batch::force_baseline_kernel(false);
+TEST(SimBatchStep, EveryKernelCopyBitEqualToScalar) {
+  const std::vector<batch::KernelCopy> copies = runnable_copies();
+  ASSERT_FALSE(copies.empty());
+  EXPECT_EQ(copies.front(), batch::KernelCopy::baseline);
+  for (batch::KernelCopy c : copies) {
+    ASSERT_TRUE(batch::use_kernel(c));
+    EXPECT_EQ(batch::lanes(), c == batch::KernelCopy::baseline ? 4 : c == batch::KernelCopy::avx2 ? 8 : 16);
+    SCOPED_TRACE(batch::kernel_name());
+    run_twin(true, false, 1);
+    run_twin(false, true, 2);
+  }
+  batch::use_default_kernel();
+  // This CPU's widest copy is the default (unless KESTREL_BATCH_KERNEL asks for another).
+  if (std::getenv("KESTREL_BATCH_KERNEL") == nullptr) {
+    EXPECT_EQ(batch::kernel_copy(), copies.back());
+  }
 }
 
 TEST(SimBatchStep, EligibilityFollowsTheConfiguration) {
@@ -284,8 +305,11 @@ TEST(SimBatchStep, WorldBitIdenticalWithAndWithoutBatchedPath) {
     int envs;
     bool variety;
   };
+  for (batch::KernelCopy copy : runnable_copies())
   for (const Case& k : {Case{"empty", 37, false}, Case{"forest", 41, false}, Case{"env_with_obstacles", 21, true},
-                        Case{"dynamic", 19, true}}) {
+                        Case{"dynamic", 19, true}, Case{"empty", 70, true}}) {
+    ASSERT_TRUE(batch::use_kernel(copy));
+    SCOPED_TRACE(batch::kernel_name());
     WorldConfig c = world_config(k.env, k.envs, 2);
     c.controller.randomize_gains = true;
     c.task.episode_len_env_steps = 150;
@@ -316,20 +340,24 @@ TEST(SimBatchStep, WorldBitIdenticalWithAndWithoutBatchedPath) {
     EXPECT_EQ(a->state_hash(), b->state_hash()) << k.env;
     EXPECT_GT(a->summary().resets, 0u) << k.env;
   }
+  batch::use_default_kernel();
 }
 
-TEST(SimBatchStep, BatchedWorldHashIdenticalFor1_2_3Threads) {
-  WorldConfig c = world_config("forest", 45, 1);  // 45: groups of 4 split unevenly over threads
-  std::uint64_t h[3] = {};
-  for (int t = 1; t <= 3; ++t) {
-    c.num_threads = t;
-    auto w = build(c, true);
-    ASSERT_EQ(w->batched(), kTwinBuild);
-    w->step(300);
-    h[t - 1] = w->state_hash();
+TEST(SimBatchStep, BatchedWorldHashIdenticalFor1_2_3ThreadsAndEveryCopy) {
+  WorldConfig c = world_config("forest", 101, 1);  // 101: groups of 4, 8 or 16 split unevenly over threads
+  std::vector<std::uint64_t> h;
+  for (batch::KernelCopy copy : runnable_copies()) {
+    ASSERT_TRUE(batch::use_kernel(copy));
+    for (int t = 1; t <= 3; ++t) {
+      c.num_threads = t;
+      auto w = build(c, true);
+      ASSERT_EQ(w->batched(), kTwinBuild);
+      w->step(300);
+      h.push_back(w->state_hash());
+    }
   }
-  EXPECT_EQ(h[0], h[1]);
-  EXPECT_EQ(h[0], h[2]);
+  batch::use_default_kernel();
+  for (std::size_t i = 1; i < h.size(); ++i) EXPECT_EQ(h[0], h[i]) << "run " << i;
 }
 
 TEST(SimBatchStep, NoHeapInsideBatchedStep) {

@@ -1,5 +1,5 @@
 // Batched twin of the per-robot physics step (World::robot_dynamics): controller -> allocation ->
-// motor model -> body wrench -> rigid-body integration for kLanes robots at once, one robot
+// motor model -> body wrench -> rigid-body integration for 4, 8 or 16 robots at once, one robot
 // per SIMD lane (structure of arrays in registers, gathered from and scattered back to the
 // world's per-robot storage).
 //
@@ -33,9 +33,13 @@
 
 namespace kestrel::sim::batch {
 
-/// Robots stepped together (4 float lanes: SSE2, which every x86-64 has; the same kernel is also
-/// compiled for AVX2 and chosen at run time, with identical results).
-constexpr int kLanes = 4;
+/// Robots stepped together, one per float lane: 4 in the baseline copy of the kernel (SSE2, which
+/// every x86-64 has), 8 in the AVX2 copy, 16 in the AVX-512 copy; the widest copy this CPU runs is
+/// chosen at run time (lanes()), and every copy gives the same bits.
+constexpr int kMaxLanes = 16;
+
+/// The copies of the kernel.
+enum class KernelCopy : int { baseline = 0, avx2 = 1, avx512 = 2 };
 
 /// The constant models of one robot type (all lanes share them).
 struct Models {
@@ -85,29 +89,38 @@ struct Lane {
 /// Whether `m` is the configuration the twin covers (see the file comment).
 bool eligible(const Models& m);
 
-/// One physics step of kLanes robots; bit-identical to, per lane, update_controller ->
+/// One physics step of lanes() robots (`lanes` points at that many); bit-identical to, per lane, update_controller ->
 /// allocate_sequential_desaturation -> motor_model_step -> wrench_from_thrusts + contact ->
 /// step_rigid_body (substeps times), as World::robot_dynamics does. Requires eligible(m).
-void robot_step(const Models& m, const Lane (&lanes)[kLanes]);
+void robot_step(const Models& m, const Lane* lanes);
 
-/// Tests: true forces the baseline (SSE2) copy of the kernel on machines where the AVX2 copy would
-/// run, so both can be checked; returns whether the AVX2 copy is in use afterwards. Not thread-safe:
-/// call it while nothing steps.
-bool force_baseline_kernel(bool on);
+/// Robots per call of the copy in use: 4, 8 or 16.
+int lanes();
 
-/// Which copy of the kernel robot_step runs on this CPU ("AVX2 copy, 4 lanes", "SSE2 copy, 4
+/// The copy in use. By default the widest this CPU and build run; the environment variable
+/// KESTREL_BATCH_KERNEL=baseline|avx2|avx512, read once at start-up, asks for a narrower one (a
+/// wider one than the CPU runs is ignored), for side-by-side timings.
+KernelCopy kernel_copy();
+
+/// Tests and benches: use copy `c` from now on; false (nothing changed) where this CPU or build
+/// cannot run it. Not thread-safe: call it while nothing steps.
+bool use_kernel(KernelCopy c);
+/// Back to the copy chosen at start-up.
+void use_default_kernel();
+
+/// Which copy of the kernel robot_step runs on this CPU ("AVX2 copy, 8 lanes", "SSE2 copy, 4
 /// lanes", ...), for `kestrel run`'s header.
 const char* kernel_name();
 
 /// The stages alone (for the bench's per-stage split), on the same lanes; each writes what the
-/// scalar stage writes. Arrays are structure-of-arrays: wrench[k][lane] with k over
-/// [fx, fy, fz, tx, ty, tz] (body frame), thrust[motor][lane].
-void controller_stage(const Models& m, const Lane (&lanes)[kLanes], real (&wrench)[6][kLanes]);
-void allocation_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&wrench)[6][kLanes],
-                      real (&thrust)[4][kLanes]);
+/// scalar stage writes, on lanes() robots. Arrays are structure-of-arrays: wrench[k][lane] with k
+/// over [fx, fy, fz, tx, ty, tz] (body frame), thrust[motor][lane] (the first lanes() columns used).
+void controller_stage(const Models& m, const Lane* lanes, real (&wrench)[6][kMaxLanes]);
+void allocation_stage(const Models& m, const Lane* lanes, const real (&wrench)[6][kMaxLanes],
+                      real (&thrust)[4][kMaxLanes]);
 /// Motor model, then the body wrench A f plus the contact torque (what step_rigid_body receives).
-void motor_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&thrust)[4][kLanes],
-                 real (&body_wrench)[6][kLanes]);
-void rigid_body_stage(const Models& m, const Lane (&lanes)[kLanes], const real (&body_wrench)[6][kLanes]);
+void motor_stage(const Models& m, const Lane* lanes, const real (&thrust)[4][kMaxLanes],
+                 real (&body_wrench)[6][kMaxLanes]);
+void rigid_body_stage(const Models& m, const Lane* lanes, const real (&body_wrench)[6][kMaxLanes]);
 
 }  // namespace kestrel::sim::batch

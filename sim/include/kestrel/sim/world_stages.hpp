@@ -47,7 +47,7 @@ void move_obstacles(const WorldModel& m, WorldData& d, int env);
 void collide_robots(const WorldModel& m, WorldData& d, int env);
 void env_step_end(const WorldModel& m, WorldData& d, int env);
 
-// The batched twin over groups of batch::kLanes environments (sim/src/engine/step_batched.cpp).
+// The batched twin over groups of batch::lanes() environments (sim/src/engine/step_batched.cpp).
 bool batch_eligible(const WorldModel& m);
 /// Steps environments [begin, end) by one env-step in groups; returns the first environment it
 /// left to the scalar path (the tail shorter than a group).
