@@ -34,8 +34,8 @@
 namespace kestrel::sim::batch {
 
 /// Robots stepped together, one per float lane: 4 in the baseline copy of the kernel (SSE2, which
-/// every x86-64 has), 8 in the AVX2 copy, 16 in the AVX-512 copy; the widest copy this CPU runs is
-/// chosen at run time (lanes()), and every copy gives the same bits.
+/// every x86-64 has), 8 in the AVX2 copy, 16 in the AVX-512 copy; the copy is chosen at run time
+/// (kernel_copy(), lanes()), and every copy gives the same bits.
 constexpr int kMaxLanes = 16;
 
 /// The copies of the kernel.
@@ -97,9 +97,10 @@ void robot_step(const Models& m, const Lane* lanes);
 /// Robots per call of the copy in use: 4, 8 or 16.
 int lanes();
 
-/// The copy in use. By default the widest this CPU and build run; the environment variable
-/// KESTREL_BATCH_KERNEL=baseline|avx2|avx512, read once at start-up, asks for a narrower one (a
-/// wider one than the CPU runs is ignored), for side-by-side timings.
+/// The copy in use. By default the AVX2 copy where this CPU and build run it (the AVX-512 copy
+/// measured no faster), else the baseline; the environment variable
+/// KESTREL_BATCH_KERNEL=baseline|avx2|avx512, read once at start-up, asks for another (one the
+/// CPU cannot run is ignored), for side-by-side timings.
 KernelCopy kernel_copy();
 
 /// Tests and benches: use copy `c` from now on; false (nothing changed) where this CPU or build
