@@ -227,8 +227,9 @@ inline void packet_triangle(const real* c, std::uint32_t id, MeshRayPacket& p, s
     const real v = (d0 * q0 + d1 * q1 + d2 * q2) * inv;
     const real t = tnum * inv;
     const real tm = tmax[i];
-    const bool ok = !(std::fabs(det) < 1e-12_r) & !(u < 0 || u > 1) & !(v < 0 || u + v > 1) & !(t < tmin || t > tm);
-    const bool take = ok & ((t < tm) | (id < tri[i]));
+    // mt_cached's rejections as one mask (no short circuit: NaN compares false there too).
+    const bool reject = (std::fabs(det) < 1e-12_r) | (u < 0) | (u > 1) | (v < 0) | (u + v > 1) | (t < tmin) | (t > tm);
+    const bool take = (!reject) & ((t < tm) | (id < tri[i]));
     tmax[i] = take ? t : tm;
     tri[i] = take ? id : tri[i];
   }
