@@ -134,7 +134,7 @@ namespace {
 // A bumpy closed sphere (kRings x 2 kRings quads) whose triangle list is given twice: every
 // triangle k has an identical twin k + half, so equal-distance hits inside one mesh pick the
 // lower id; part ids make the winner visible in the segmentation.
-constexpr int kRings = 6;
+constexpr int kRings = 3;  // small: the netduinoplus2 test image has ~25 KiB of RAM to spare
 constexpr std::uint32_t kRingVerts = 2 * kRings * (kRings + 1), kHalfTris = 2 * kRings * 2 * kRings;
 constexpr std::uint32_t kTwinTris = 2 * kHalfTris;
 real g_mesh_v[3 * kRingVerts];
@@ -143,7 +143,7 @@ BvhNode g_mesh_nodes[bvh_node_capacity(kTwinTris)];
 std::uint32_t g_mesh_prims[kTwinTris];
 real g_mesh_cache[kTriangleCacheStride * kTwinTris];
 Aabb g_mesh_scratch[kTwinTris];
-real g_normals[3 * kMaxRays];
+real* const g_normals = g_points;  // no second 3 x kMaxRays buffer on the MCUs
 
 bool build_twin_mesh(TriangleMesh& mesh) {
   const int nu = 2 * kRings, nv = kRings;
