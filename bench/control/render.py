@@ -3,7 +3,9 @@
 (bench/results/report.md) and one bar chart per target (bench/results/<target>/control.png),
 so a change in cost shows up in review as a diff of committed text and images. The host
 micro-benchmarks (bench/results/host/micro.csv, written by bench/micro/run.sh) get their own
-section and host/micro.png (render_host_micro).
+section and host/micro.png (render_host_micro), the ray-casting comparison with Embree
+(bench/results/host/raycast.csv, written by kestrel_bench_raycast) its own and host/raycast.png
+(render_host_raycast).
 
 The charts are matplotlib's (pinned in python/requirements.txt, installed in .venv/ by
 scripts/deps.sh): labelled bars, units, the targets. Targets from the issue are checked in the
@@ -253,6 +255,87 @@ def _host_micro_png(path, labels, groups, batches):
     plt.close(fig)
 
 
+# Issue 18: on the triangles-only scene, Kestrel's render at least Embree's rtcIntersect8 rate on
+# the coherent camera rays (the same rays and triangles, one thread, measured in one run).
+RAYCAST_GOAL = ("camera_135x240_triangles", 1.0)
+
+
+def render_host_raycast(results):
+    """Ray casting vs Embree 3 (bench/raycast, written by kestrel_bench_raycast --csv): a table of
+    Mrays/s per sensor and scene (Kestrel's tiled render and single rays; Embree's rtcIntersect1/4/8)
+    with the ratios measured in the same run, and host/raycast.png (grouped bars). Rows of an older
+    CSV without the scene / single-ray columns are shown with those cells empty. Returns the
+    report's lines; nothing when host/raycast.csv is absent."""
+    path = os.path.join(results, "host", "raycast.csv")
+    if not os.path.isfile(path):
+        return []
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    out = ["## host: ray casting vs Embree 3 (bench/raycast)", "",
+           "Mrays/s, one thread, the same rays and scene on both sides, every figure of a row from one run",
+           "(`build/host/bench/raycast/kestrel_bench_raycast --csv bench/results/host/raycast.csv`). Scene",
+           "`mixed`: boxes, capsule trunks and a mesh; Kestrel intersects boxes and capsules analytically, Embree",
+           "gets the trunks as round curves (its slowest primitive). Scene `triangles`: the same field as one",
+           "triangle soup on both sides. Kestrel: `render` (8x8 tiles) and `Scene::intersect` one ray at a time;",
+           "Embree: `rtcIntersect1`, and `rtcIntersect4/8` on 4x1 / 8x1 pixel packets of a row.", ""]
+    notes = sorted({r.get("note", "") for r in rows if r.get("note")})
+    out += [f"- {n}" for n in notes]
+    if notes:
+        out.append("")
+    out += ["| sensor | scene | rays | Kestrel render | Kestrel single rays | Embree 1 | Embree 4 | Embree 8 | "
+            "render / Embree 1 | render / Embree 8 | distance mismatches | render vs single-ray diffs |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    labels, groups = [], []
+    for r in rows:
+        k, e1, e8 = float(r["kestrel_mrays_s"]), float(r["embree_rtcintersect1_mrays_s"]), float(r["embree_rtcintersect8_mrays_s"])
+        single = r.get("kestrel_single_ray_mrays_s", "")
+        scene = r.get("scene", "") or "mixed"
+        out.append(f"| {r['sensor']} | {scene} | {r['rays']} | {k:.2f} | {float(single):.2f} | " if single else
+                   f"| {r['sensor']} | {scene} | {r['rays']} | {k:.2f} |  | ")
+        out[-1] += (f"{e1:.2f} | {float(r['embree_rtcintersect4_mrays_s']):.2f} | {e8:.2f} | {k / e1:.2f}x | {k / e8:.2f}x | "
+                    f"{r['mismatches']} | {r['render_vs_single_ray_diffs']} |")
+        labels.append(f"{r['sensor']}")
+        groups.append([k, float(single) if single else 0.0, e1, float(r["embree_rtcintersect4_mrays_s"]), e8])
+    goal = next((r for r in rows if r["sensor"] == RAYCAST_GOAL[0]), None)
+    if goal is not None:
+        ratio = float(goal["kestrel_mrays_s"]) / float(goal["embree_rtcintersect8_mrays_s"])
+        out += ["", f"Issue 18 goal, {RAYCAST_GOAL[0]}: Kestrel render >= {RAYCAST_GOAL[1]:.1f}x Embree rtcIntersect8: "
+                    f"{ratio:.2f}x, {'met' if ratio >= RAYCAST_GOAL[1] else 'NOT met'}."]
+    _host_raycast_png(os.path.join(results, "host", "raycast.png"), labels, groups)
+    out += ["", "![host raycast](host/raycast.png) (per row of the table: Kestrel render, Kestrel single rays, Embree "
+                "rtcIntersect1, 4, 8; Mrays/s)", ""]
+    return out
+
+
+def _host_raycast_png(path, labels, groups):
+    """Grouped horizontal bars: per sensor row, Kestrel (render, single rays) in greens and Embree
+    (rtcIntersect1/4/8) in blues, Mrays/s on a linear scale, each bar labelled with its value."""
+    plt = _pyplot()
+    series = [("Kestrel render (8x8 tiles)", "#1b7837"), ("Kestrel Scene::intersect, single rays", "#7fbf7b"),
+              ("Embree rtcIntersect1", "#96bee6"), ("Embree rtcIntersect4 (4x1)", "#4682c8"),
+              ("Embree rtcIntersect8 (8x1)", "#1e4696")]
+    n = len(series)
+    h = 0.8 / n
+    fig, ax = plt.subplots(figsize=(10, 0.9 * len(groups) + 1.8), layout="constrained")
+    for j, (name, colour) in enumerate(series):
+        ys = [i + (j - (n - 1) / 2) * h for i in range(len(groups))]
+        vals = [g[j] for g in groups]
+        ax.barh(ys, vals, height=h * 0.95, color=colour, label=name)
+        for y, v in zip(ys, vals):
+            if v > 0:
+                ax.text(v + 0.2, y, f"{v:.1f}", va="center", fontsize=6.5)
+    top = max((v for g in groups for v in g), default=10.0)
+    ax.set_xlim(0, top * 1.15)
+    ax.set_yticks(range(len(groups)), labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("million rays per second, one thread (higher is better)")
+    ax.grid(axis="x", alpha=0.25)
+    ax.legend(loc="lower right", fontsize=7.5)
+    ax.set_title("ray casting, Kestrel vs Embree 3 (bench/raycast): same rays, same scene, one run", fontsize=10, loc="left")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def main():
     results = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "results")
     out = ["# Control benchmark (generated by bench/control/render.py)", "",
@@ -308,6 +391,7 @@ def main():
                                 "the policy controller's (observation -> 13-64-64-4 MLP -> action clip)")
         out += render_stack(results, target, rows)
     out += render_host_micro(results)
+    out += render_host_raycast(results)
     out += ["## Peers (issue 6, same emulator and compiler, not re-measured here)", "", "| peer | instructions/call |", "|---|---:|"]
     out += [f"| {n} | {v} |" for n, v in PEERS]
     with open(os.path.join(results, "report.md"), "w") as f:

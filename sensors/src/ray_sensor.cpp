@@ -303,6 +303,17 @@ void apply_noise(const NoiseParams& p, real* values, std::uint32_t n, RngStream&
   }
 }
 
+// Tile packets (Scene::intersect_tile) where the host has vector lanes for their per-ray loops;
+// on a scalar FPU (the MCUs) they would only add stack (a few KB per tile) and code, so render
+// casts ray by ray there. Both give the same bits.
+#ifndef KESTREL_SENSORS_TILE_PACKETS
+#if defined(__SSE2__) || defined(__ARM_NEON) || defined(__AVX__)
+#define KESTREL_SENSORS_TILE_PACKETS 1
+#else
+#define KESTREL_SENSORS_TILE_PACKETS 0
+#endif
+#endif
+
 Status render(const Scene& scene, const SensorPose& pose, const RayTable& table, const RangeOutputParams& op,
               bool depth, SensorOutput& out, const NoiseParams* noise, RngStream* rng) {
   const std::uint32_t n = table.height * table.width;
@@ -355,6 +366,21 @@ Status render(const Scene& scene, const SensorPose& pose, const RayTable& table,
         cos_half -= 1e-5_r;  // rounding margin (never narrower than the rays)
       }
       scene.gather_cone(o, axis, cos_half, tile_tmax, cand);
+#if KESTREL_SENSORS_TILE_PACKETS
+      // The whole tile at once (meshes walked once per tile, see Scene::intersect_tile).
+      real tile_tmaxs[kTile * kTile];
+      SceneHit tile_hits[kTile * kTile];
+      bool tile_found[kTile * kTile];
+      m = 0;
+      for (std::uint32_t i = i0; i < i1; ++i) {
+        for (std::uint32_t j = j0; j < j1; ++j, ++m) {
+          const std::uint32_t idx = i * cols + j;
+          const real scale = depth && table.depth_scale != nullptr ? table.depth_scale[idx] : 1_r;
+          tile_tmaxs[m] = op.max_range / scale;  // depth: a far cut that is a plane (golden convention)
+        }
+      }
+      scene.intersect_tile(cand, dirs, m, 0, tile_tmaxs, tile_hits, tile_found);
+#endif
       m = 0;
       for (std::uint32_t i = i0; i < i1; ++i) {
         for (std::uint32_t j = j0; j < j1; ++j, ++m) {
@@ -362,10 +388,15 @@ Status render(const Scene& scene, const SensorPose& pose, const RayTable& table,
           const real* ds = &table.dirs_s[3 * idx];
           const real* d = dirs[m];
           const real scale = depth && table.depth_scale != nullptr ? table.depth_scale[idx] : 1_r;
+#if KESTREL_SENSORS_TILE_PACKETS
+          const SceneHit& hit = tile_hits[m];
+          const bool found = tile_found[m];
+#else
           // Depth: cast to max_range / scale so the far cut is a plane (golden convention).
           const real tmax = op.max_range / scale;
           SceneHit hit;
           const bool found = scene.intersect(cand, make_ray(o, d), 0, tmax, hit);
+#endif
           const real t = found ? hit.t : kNoHitValue;
           if (out.range != nullptr) out.range[idx] = found ? t * scale : kNoHitValue;
           if (out.segmentation != nullptr)

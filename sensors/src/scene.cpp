@@ -149,18 +149,26 @@ inline void to_local_origin(const SceneObject& ob, const real ow[3], real o[3]) 
   o[2] = r[2] * v[0] + r[5] * v[1] + r[8] * v[2];
 }
 
+// R^T d_w: a world direction in the object's frame (rigid: ranges are the same in both frames).
+inline void local_direction(const SceneObject& ob, const real dw[3], real d[3]) {
+  const real* r = ob.r_wl;
+  d[0] = r[0] * dw[0] + r[3] * dw[1] + r[6] * dw[2];
+  d[1] = r[1] * dw[0] + r[4] * dw[1] + r[7] * dw[2];
+  d[2] = r[2] * dw[0] + r[5] * dw[1] + r[8] * dw[2];
+}
+
+inline void commit(const SceneObject& ob, std::uint32_t id, const real d[3], const LocalHit& h, std::uint32_t prim,
+                   Best& best);
+
 // Tests one object with the world ray moved into its local frame; o is the ray origin already in
 // that frame (R^T (o_w - p); computed per ray, or once per sensor tile for shared-origin rays).
 inline void test_object_local(const SceneObject& ob, std::uint32_t id, const real o[3], const Ray& rw, real tmin,
                               Best& best, real tmax) {
-  const real* r = ob.r_wl;
-  const real* dw = rw.d;
-  // R^T d (rigid: ranges are the same in both frames).
-  const real d[3] = {r[0] * dw[0] + r[3] * dw[1] + r[6] * dw[2], r[1] * dw[0] + r[4] * dw[1] + r[7] * dw[2],
-                     r[2] * dw[0] + r[5] * dw[1] + r[8] * dw[2]};
+  real d[3];
   LocalHit h;
   bool hit = false;
   std::uint32_t prim = 0;
+  local_direction(ob, rw.d, d);
   switch (ob.shape.type) {
     case ShapeType::box: hit = intersect_box(o, d, ob.shape.size, tmin, tmax, h); break;
     case ShapeType::sphere: hit = intersect_sphere(o, d, ob.shape.size[0], tmin, tmax, h); break;
@@ -188,7 +196,13 @@ inline void test_object_local(const SceneObject& ob, std::uint32_t id, const rea
       break;
     }
   }
-  if (!hit || !better(best, h.t, id, prim)) return;
+  if (hit) commit(ob, id, d, h, prim, best);
+}
+
+// Keeps the local hit h (object id, primitive prim, local ray direction d) if it beats best.
+inline void commit(const SceneObject& ob, std::uint32_t id, const real d[3], const LocalHit& h, std::uint32_t prim,
+                   Best& best) {
+  if (!better(best, h.t, id, prim)) return;
   best.t = h.t;
   best.object = id;
   best.prim = prim;
@@ -348,6 +362,75 @@ bool Scene::intersect(const ConeCandidates& c, const Ray& ray, real tmin, real t
     if (best.found) t = best.t;
   }
   return finish(objects_, best, hit);
+}
+
+void Scene::intersect_tile(const ConeCandidates& c, const real (*d_w)[3], std::uint32_t n, real tmin, const real* tmax,
+                           SceneHit* hits, bool* found) const {
+  if (c.overflow || dirty_ || n > kMaxTileRays) {
+    for (std::uint32_t i = 0; i < n; ++i) found[i] = intersect(c, make_ray(c.origin_w, d_w[i]), tmin, tmax[i], hits[i]);
+    return;
+  }
+  // Per ray, the same steps as intersect(c, ...): unbounded objects, then the candidates in order
+  // with the same culls (lower bound, world box) against that ray's running best t. Candidates
+  // are taken one at a time for all rays instead of rays one at a time: every ray still sees the
+  // same objects in the same order with the same t, so its result is unchanged.
+  Ray rays[kMaxTileRays];
+  Best best[kMaxTileRays];
+  real t[kMaxTileRays];
+  for (std::uint32_t i = 0; i < n; ++i) {
+    rays[i] = make_ray(c.origin_w, d_w[i]);
+    best[i] = Best{tmax[i], 0, 0, {0, 0, 0}, false};
+    for (std::uint32_t k = 0; k < unbounded_count_; ++k)
+      test_object(objects_[unbounded_[k]], unbounded_[k], rays[i], tmin, best[i], best[i].t);
+    t[i] = best[i].t;
+  }
+  MeshRayPacket packet;
+  std::uint32_t lane_ray[kMaxTileRays];
+  for (std::uint32_t k = 0; k < c.count; ++k) {
+    const std::uint32_t id = c.id[k];
+    const SceneObject& ob = objects_[id];
+    // intersect(c, ...) stops a ray's walk at the first lower bound beyond its best t; the bounds
+    // are sorted and t only shrinks, so skipping this candidate for that ray is the same.
+    std::uint32_t live = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      real tn;
+      if (c.lower[k] > t[i] || !ray_box(rays[i], ob.box_w.lo, ob.box_w.hi, tmin, t[i], tn)) continue;
+      lane_ray[live++] = i;
+    }
+    if (live == 0) continue;
+    if (ob.shape.type == ShapeType::mesh && live > 1) {
+      packet.count = live;
+      for (int a = 0; a < 3; ++a) packet.o[a] = c.o_l[k][a];
+      for (std::uint32_t j = 0; j < live; ++j) {
+        real d[3];
+        local_direction(ob, rays[lane_ray[j]].d, d);
+        const Ray rl = make_ray(c.o_l[k], d);
+        for (int a = 0; a < 3; ++a) {
+          packet.d[a][j] = rl.d[a];
+          packet.inv_d[a][j] = rl.inv_d[a];
+        }
+        packet.tmax[j] = t[lane_ray[j]];
+      }
+      mesh_intersect_packet(*ob.shape.mesh, packet, tmin);
+      for (std::uint32_t j = 0; j < live; ++j) {
+        if (packet.tri[j] == MeshRayPacket::kNoTriangle) continue;
+        const std::uint32_t i = lane_ray[j];
+        const real d[3] = {packet.d[0][j], packet.d[1][j], packet.d[2][j]};
+        LocalHit h;
+        h.t = packet.tmax[j];
+        mesh_triangle_normal(*ob.shape.mesh, packet.tri[j], h.n);
+        commit(ob, id, d, h, packet.tri[j], best[i]);
+        if (best[i].found) t[i] = best[i].t;
+      }
+    } else {
+      for (std::uint32_t j = 0; j < live; ++j) {
+        const std::uint32_t i = lane_ray[j];
+        test_object_local(ob, id, c.o_l[k], rays[i], tmin, best[i], t[i]);
+        if (best[i].found) t[i] = best[i].t;
+      }
+    }
+  }
+  for (std::uint32_t i = 0; i < n; ++i) found[i] = finish(objects_, best[i], hits[i]);
 }
 
 }  // namespace kestrel::sensors

@@ -2,6 +2,7 @@
 // out-of-range and normalisation rules, the camera's planar depth, segmentation, noise statistics
 // from fixed seeds, mounting and the IMU model.
 #include <cmath>
+#include <cstring>
 
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sensors/imu.hpp"
@@ -126,6 +127,133 @@ KTEST(SensorRender, CameraDepthIsPlanarAndRangeIsAlongTheRay) {
   // Sensor-frame convention: column 0 looks left (+y), row 0 looks up (+z).
   KEXPECT_GT(g_dirs[1], 0);
   KEXPECT_GT(g_dirs[2], 0);
+}
+
+namespace {
+
+// A bumpy closed sphere (kRings x 2 kRings quads) whose triangle list is given twice: every
+// triangle k has an identical twin k + half, so equal-distance hits inside one mesh pick the
+// lower id; part ids make the winner visible in the segmentation.
+constexpr int kRings = 3;  // small: the netduinoplus2 test image has ~25 KiB of RAM to spare
+constexpr std::uint32_t kRingVerts = 2 * kRings * (kRings + 1), kHalfTris = 2 * kRings * 2 * kRings;
+constexpr std::uint32_t kTwinTris = 2 * kHalfTris;
+real g_mesh_v[3 * kRingVerts];
+std::uint32_t g_mesh_i[3 * kTwinTris], g_mesh_parts[kTwinTris];
+BvhNode g_mesh_nodes[bvh_node_capacity(kTwinTris)];
+std::uint32_t g_mesh_prims[kTwinTris];
+real g_mesh_cache[kTriangleCacheStride * kTwinTris];
+Aabb g_mesh_scratch[kTwinTris];
+real* const g_normals = g_points;  // no second 3 x kMaxRays buffer on the MCUs
+
+bool build_twin_mesh(TriangleMesh& mesh) {
+  const int nu = 2 * kRings, nv = kRings;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const real th = kPi * static_cast<real>(j) / static_cast<real>(nv), ph = kTwoPi * static_cast<real>(i) / static_cast<real>(nu);
+      const real r = 1 + 0.15_r * std::sin(3 * ph) * std::sin(2 * th);
+      real* v = &g_mesh_v[3 * (j * nu + i)];
+      v[0] = r * std::sin(th) * std::cos(ph);
+      v[1] = r * std::sin(th) * std::sin(ph);
+      v[2] = r * std::cos(th);
+    }
+  std::uint32_t k = 0;
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const std::uint32_t a = static_cast<std::uint32_t>(j * nu + i), b = static_cast<std::uint32_t>(j * nu + (i + 1) % nu);
+      const std::uint32_t c = a + static_cast<std::uint32_t>(nu), d = b + static_cast<std::uint32_t>(nu);
+      const std::uint32_t quad[6] = {a, c, b, b, c, d};
+      for (std::uint32_t q = 0; q < 6; ++q) g_mesh_i[k++] = quad[q];
+    }
+  for (std::uint32_t q = 0; q < 3 * kHalfTris; ++q) g_mesh_i[3 * kHalfTris + q] = g_mesh_i[q];
+  for (std::uint32_t t = 0; t < kTwinTris; ++t) g_mesh_parts[t] = 100 + t % 7 + (t >= kHalfTris ? 50 : 0);
+  mesh = TriangleMesh{};
+  mesh.vertices = g_mesh_v;
+  mesh.vertex_count = kRingVerts;
+  mesh.indices = g_mesh_i;
+  mesh.triangle_count = kTwinTris;
+  mesh.part_ids = g_mesh_parts;
+  return mesh_build(mesh, MeshStorage{g_mesh_nodes, bvh_node_capacity(kTwinTris), g_mesh_prims, g_mesh_cache,
+                                      g_mesh_scratch, kTwinTris}) == Status::ok;
+}
+
+bool same_bits(real a, real b) { return std::memcmp(&a, &b, sizeof(real)) == 0; }
+
+// Rays of the table cast by render (in tiles) and one by one through Scene::intersect must give
+// the same range, segmentation and normal bits. Returns the number of differing rays.
+std::uint32_t render_vs_single_rays(const Scene& s, const SensorPose& pose, const RayTable& t, const RangeOutputParams& op,
+                                    bool depth) {
+  SensorOutput out;
+  out.range = g_range;
+  out.segmentation = g_seg;
+  out.normals_w = g_normals;
+  if (render(s, pose, t, op, depth, out) != Status::ok) return 0xffffffffu;
+  const Mat3 r = rotation_matrix(pose.orientation_ws.normalized());
+  const real o[3] = {pose.position_w[0], pose.position_w[1], pose.position_w[2]};
+  std::uint32_t diffs = 0;
+  for (std::uint32_t i = 0; i < t.height * t.width; ++i) {
+    const real* ds = &t.dirs_s[3 * i];
+    const real d[3] = {r(0, 0) * ds[0] + r(0, 1) * ds[1] + r(0, 2) * ds[2], r(1, 0) * ds[0] + r(1, 1) * ds[1] + r(1, 2) * ds[2],
+                       r(2, 0) * ds[0] + r(2, 1) * ds[1] + r(2, 2) * ds[2]};
+    const real sc = depth ? t.depth_scale[i] : 1_r;
+    SceneHit h;
+    const bool found = s.intersect(make_ray(o, d), 0, op.max_range / sc, h);
+    real v = found ? h.t * sc : kNoHitValue;
+    if (v > op.max_range) v = op.far_out_of_range_value;
+    if (v < op.min_range) v = op.near_out_of_range_value;
+    if (op.normalize_range) v = v / op.max_range;
+    bool same = same_bits(v, g_range[i]) && g_seg[i] == (found ? static_cast<std::int32_t>(h.seg_id) : kNoHitSegment);
+    for (int k = 0; k < 3; ++k) same = same && same_bits(found ? h.normal_w[k] : 0_r, g_normals[3 * i + k]);
+    if (!same) ++diffs;
+  }
+  return diffs;
+}
+
+}  // namespace
+
+KTEST(SensorRender, TiledMeshRenderIsBitIdenticalToSingleRays) {
+  // Meshes are cast a tile at a time (Scene::intersect_tile on hosts with vector lanes): the same
+  // bits as single rays, ties included (twin triangles in one mesh; two coincident instances of
+  // it, where the lower object id must win), next to analytic shapes, with and without rotation.
+  TriangleMesh mesh;
+  KASSERT_TRUE(build_twin_mesh(mesh));
+  Scene s(g_storage);
+  const Quat q = quat_from_euler_xyz(0.4_r, -0.3_r, 0.9_r);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::triangle_mesh(&mesh), Vec3(3, 0.5_r, 0.2_r), q, 1)), 0);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::triangle_mesh(&mesh), Vec3(3, 0.5_r, 0.2_r), q, 2)), 0);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::triangle_mesh(&mesh), Vec3(-2, 2, 0.5_r), kIdentity, 3)), 0);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::box(0.3_r, 0.3_r, 2), Vec3(2.6_r, -0.8_r, 0), q, 4)), 0);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::capsule(0.2_r, 1), Vec3(0.5_r, -3, 0), kIdentity, 5)), 0);
+  KASSERT_EQ(static_cast<int>(s.add(Shape::plane(), Vec3(0, 0, -1.5_r), kIdentity, 6)), 0);
+  KASSERT_EQ(static_cast<int>(s.build()), 0);
+  SensorPose pose;
+  pose.position_w = Vec3(0.1_r, 0.05_r, 0.3_r);
+  pose.orientation_ws = quat_from_euler_xyz(0, 0.05_r, 0.1_r);
+  LidarParams lp = lidar_preset_osdome_64();
+  lp.height = 16;
+  lp.width = 64;
+  RayTable t{g_dirs, g_scale, kMaxRays, 0, 0};
+  KASSERT_EQ(static_cast<int>(lidar_rays(lp, t)), 0);
+  KEXPECT_EQ(render_vs_single_rays(s, pose, t, lp.range, false), 0u);
+  CameraParams cp = camera_preset_base();
+  cp.height = 27;  // not a multiple of the 8 x 8 tile: partial tiles too
+  cp.width = 44;
+  KASSERT_EQ(static_cast<int>(camera_rays(cp, t)), 0);
+  KEXPECT_EQ(render_vs_single_rays(s, pose, t, cp.range, true), 0u);
+  KEXPECT_EQ(render_vs_single_rays(s, pose, t, cp.range, false), 0u);
+  // The camera sees the first instance (the twin triangles and the coincident instance never win).
+  SensorOutput out;
+  out.range = g_range;
+  out.segmentation = g_seg;
+  KASSERT_EQ(static_cast<int>(render(s, pose, t, cp.range, false, out)), 0);
+  std::uint32_t on_mesh = 0;
+  for (std::uint32_t i = 0; i < cp.height * cp.width; ++i) {
+    KEXPECT_TRUE(g_seg[i] < 150);
+    if (g_seg[i] >= 100) ++on_mesh;
+  }
+  KEXPECT_GT(on_mesh, 50u);
+  Status st = Status::invalid_argument;
+  KEXPECT_NO_HEAP(st = render(s, pose, t, cp.range, false, out));
+  KEXPECT_EQ(static_cast<int>(st), 0);
 }
 
 KTEST(SensorRender, DirtySceneAndBadTableAreRefused) {

@@ -51,6 +51,25 @@ struct TriangleMesh {
 /// the hit distance and tri the triangle id (equal distances: lowest triangle id).
 bool mesh_intersect(const TriangleMesh& mesh, const Ray& ray, real tmin, real& tmax, std::uint32_t& tri);
 
+/// Rays that share one origin (a sensor tile moved into the mesh's frame), cast together through
+/// the mesh BVH by mesh_intersect_packet. Structure of arrays so the per-ray loops vectorise.
+struct MeshRayPacket {
+  static constexpr std::uint32_t kMax = 64;                 // one 8 x 8 sensor tile
+  static constexpr std::uint32_t kNoTriangle = 0xffffffffu;  // tri[] of a ray without a hit
+  std::uint32_t count = 0;
+  real o[3] = {0, 0, 0};   // shared origin, local frame
+  real d[3][kMax];         // unit directions, local frame (as make_ray stores them)
+  real inv_d[3][kMax];     // make_ray's inverse directions
+  real tmax[kMax];         // in: each ray's range limit; out: its hit distance where tri[] is set
+  std::uint32_t tri[kMax];  // out: the hit triangle id or kNoTriangle (set by the call)
+};
+
+/// Closest hit of every ray of the packet: for each ray i exactly what mesh_intersect(mesh,
+/// make_ray(o, d_i), tmin, tmax[i], tri[i]) returns, bit for bit (the same Möller–Trumbore
+/// arithmetic and the same (t, triangle id) minimum; only the node visiting order differs, and the
+/// result does not depend on it, see mesh.cpp).
+void mesh_intersect_packet(const TriangleMesh& mesh, MeshRayPacket& p, real tmin);
+
 /// Unit normal of triangle tri (local frame, right-hand winding).
 void mesh_triangle_normal(const TriangleMesh& mesh, std::uint32_t tri, real n[3]);
 

@@ -116,6 +116,13 @@ class Scene {
   /// Closest hit of ray_w (origin exactly c.origin_w, direction within the gathered cone). Same
   /// result as intersect(ray_w, ...): the same (t, object, prim) minimum over the same tests.
   bool intersect(const ConeCandidates& c, const Ray& ray_w, real tmin, real tmax, SceneHit& hit) const;
+  /// Rays i < n (n <= kMaxTileRays) from c.origin_w with world directions d_w[i] (within the
+  /// gathered cone), cast together: found[i] and hits[i] are what intersect(c, make_ray(c.origin_w,
+  /// d_w[i]), tmin, tmax[i], hit) returns, bit for bit. Mesh candidates are walked once for all
+  /// the rays that reach them (mesh_intersect_packet); other shapes ray by ray.
+  static constexpr std::uint32_t kMaxTileRays = MeshRayPacket::kMax;
+  void intersect_tile(const ConeCandidates& c, const real (*d_w)[3], std::uint32_t n, real tmin, const real* tmax,
+                      SceneHit* hits, bool* found) const;
 
  private:
   SceneObject* objects_ = nullptr;
