@@ -24,6 +24,8 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "kestrel/controllers/joint_pd.hpp"
 #include "kestrel/dynamics/contact.hpp"
@@ -51,7 +53,8 @@ constexpr std::size_t kMaxDelay = 4;       // physics steps of action delay the 
 using Drive = JointPdParams<kMaxJoints, kMaxDelay>;
 using DriveState = JointPdState<kMaxJoints, kMaxDelay>;
 constexpr real kBaseContactThreshold_N = 1;
-constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
+constexpr int kWarmRows = 96;
+constexpr int kMaxSelfShapes = 64;  // collision geoms of a robot with self-collisions on  // rows of the previous step kept per robot (contact.hpp's WarmStart)
 
 struct Worker {
   // The robot's model with one environment's randomised root-body inertia and joint armatures
@@ -148,7 +151,9 @@ class ArticulatedSimulator final : public Simulator {
         return false;
       }
       shapes_.push_back(s);
+      shape_bits_.push_back({g.contype, g.conaffinity});
     }
+    if (c.robot.self_collisions && !build_self_pairs(pre, error)) return false;
     if (!Terrain::build(c.env.terrain, c.seed, terrain_, error)) return false;
     params_.iterations = c.sim.solver_iterations;
 
@@ -398,6 +403,26 @@ class ArticulatedSimulator final : public Simulator {
                                           static_cast<int>(si));
       found += std::min(k, room);
     }
+    // Self-collision (robot.self_collisions): each allowed pair of the robot's own shapes, both
+    // bodies pushed apart (two-body rows, contact.hpp). Keys after the terrain's (8 per shape).
+    // A bounding sphere per shape first, so most pairs cost one distance test.
+    const int self_key0 = 16 * static_cast<int>(shapes_.size());
+    Vec3 centre_w[kMaxSelfShapes];
+    if (!self_pairs_.empty())
+      for (std::size_t si = 0; si < shapes_.size(); ++si) {
+        const dy::Transform& X = w.scratch.X_world[shapes_[si].body];
+        centre_w[si] = X.r + X.E.transpose() * shapes_[si].p_b;
+      }
+    for (std::size_t p = 0; p < self_pairs_.size() && found < kMaxContacts; ++p) {
+      const std::size_t ia = static_cast<std::size_t>(self_pairs_[p].first), ib = static_cast<std::size_t>(self_pairs_[p].second);
+      if ((centre_w[ia] - centre_w[ib]).norm() > bound_r_[ia] + bound_r_[ib] + kContactMargin_m) continue;
+      const dy::CollisionShape& sa = shapes_[ia];
+      const dy::CollisionShape& sb = shapes_[ib];
+      const int room = kMaxContacts - found;
+      const int k = dy::collide_shapes(sa, w.scratch.X_world[sa.body], sb, w.scratch.X_world[sb.body], kContactMargin_m,
+                                       w.contacts + found, room, self_key0 + 16 * static_cast<int>(p));
+      found += std::min(k, room);
+    }
     if (randomise_contacts_)
       for (int k = 0; k < found; ++k) {
         if (dr_friction_[ei] >= 0) w.contacts[k].friction = dr_friction_[ei];
@@ -415,8 +440,13 @@ class ArticulatedSimulator final : public Simulator {
       ++step_errors_[ei];  // refused: the state is held (the core's contract)
       return;
     }
-    for (int k = 0; k < found; ++k)
-      for (int c = 0; c < 3; ++c) lf[3 * w.contacts[k].body + c] += w.scratch.contact_force_w[k][c];
+    // Per-link contact forces; a self contact pushes its second body the other way.
+    for (int k = 0; k < found; ++k) {
+      const dy::ContactPoint& ck = w.contacts[k];
+      for (int c = 0; c < 3; ++c) lf[3 * ck.body + c] += w.scratch.contact_force_w[k][c];
+      if (ck.body_b >= 0)
+        for (int c = 0; c < 3; ++c) lf[3 * ck.body_b + c] -= w.scratch.contact_force_w[k][c];
+    }
   }
 
   /// The views of environment e from its state (and its feet by forward kinematics).
@@ -692,6 +722,33 @@ class ArticulatedSimulator final : public Simulator {
   std::vector<real> height_x_b_, height_y_b_;  // measured_heights points, base-yaw frame
   std::vector<real> heights_;                  // (envs x points)
   std::vector<dy::CollisionShape> shapes_;
+  std::vector<std::pair<int, int>> shape_bits_;  // per shape: the file's contype, conaffinity
+  std::vector<std::pair<int, int>> self_pairs_;  // shape index pairs that may touch (robot.self_collisions)
+  std::vector<real> bound_r_;                    // per shape: its bounding radius about its centre
+
+  // The shape pairs of robot.self_collisions: two shapes on different bodies that no joint
+  // connects directly (a joint's two links overlap at the joint by construction, and PhysX's
+  // articulations, legged_gym's, never collide them either), and whose collision bits let them
+  // touch as MuJoCo's filter does: (contype_a & conaffinity_b) || (contype_b & conaffinity_a).
+  bool build_self_pairs(const std::string& pre, std::string& error) {
+    const RobotMultibody& m = robot_.multibody;
+    if (shapes_.size() > static_cast<std::size_t>(kMaxSelfShapes)) {
+      error = pre + "robot.self_collisions: the robot has " + std::to_string(shapes_.size()) + " collision geoms, at most " +
+              std::to_string(kMaxSelfShapes) + " with self-collisions on";
+      return false;
+    }
+    for (const dy::CollisionShape& sh : shapes_) bound_r_.push_back(dy::detail::bounding_radius(sh));
+    for (std::size_t i = 0; i < shapes_.size(); ++i)
+      for (std::size_t j = i + 1; j < shapes_.size(); ++j) {
+        const int a = shapes_[i].body, b = shapes_[j].body;
+        if (a == b || m.parent[a] == b || m.parent[b] == a) continue;
+        const auto& ba = shape_bits_[i];
+        const auto& bb = shape_bits_[j];
+        if ((ba.first & bb.second) == 0 && (bb.first & ba.second) == 0) continue;
+        self_pairs_.push_back({static_cast<int>(i), static_cast<int>(j)});
+      }
+    return true;
+  }
   std::unique_ptr<Terrain> terrain_;
   std::vector<Vec3> origins_;
   int nq_ = 0, nv_ = 0;

@@ -276,6 +276,8 @@ void convert(const mjModel* m, const std::string& path, ArticulatedRobot& r) {
     geom.pos_b = pos.cast<real>();
     geom.quat_xyzw_b = Vec4(static_cast<real>(q.x()), static_cast<real>(q.y()), static_cast<real>(q.z()), static_cast<real>(q.w()));
     geom.friction = static_cast<real>(m->geom_friction[3 * g]);
+    geom.contype = m->geom_contype[g];
+    geom.conaffinity = m->geom_conaffinity[g];
     r.geoms.push_back(geom);
   }
 

@@ -348,6 +348,8 @@ const Schema<RobotConfig>& robot_schema() {
                 "articulated: dry friction of every actuated joint (-1: the robot file's)"),
       real_f<S>("joint_armature_kg_m2", &S::joint_armature_kg_m2, "kg m^2", -1, 1e4,
                 "articulated: rotor inertia of every actuated joint (-1: the robot file's)"),
+      bool_f<S>("self_collisions", &S::self_collisions,
+                "articulated: contacts between the robot's own links (not those a joint connects; the file's contype/conaffinity filter)"),
   };
   static const StructuralKey st[] = {
       {"urdf", "URDF file: mass, inertia, collision shape and rotors (the keys here override it)"},

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -691,4 +692,94 @@ TEST(Articulated, TerrainCurriculumPlacesRobotsOnTilesAndMovesTheirLevels) {
   EXPECT_EQ(flat->num_terrain_levels(), 0);
   EXPECT_FALSE(flat->update_terrain_curriculum(ids, 1, up, down));
   EXPECT_NE(flat->last_error().find("tiled terrain"), std::string::npos);
+}
+
+// robot.self_collisions (off by default, as legged_gym's ANYmal has it): two arms on hinges from a
+// fixed base, driven to swing their tips through each other. Off, the tips cross; on, the two-body
+// contacts stop them at the tips' touching distance, and the link forces are equal and opposite.
+// Go2 and ANYmal C standing at home are the same with it on (no pair touches at the home pose: a
+// joint's two links, which overlap at the joint, are never a pair).
+TEST(Articulated, SelfCollisionsStopTwoArmsFromPassingThroughEachOther) {
+  const std::string path = ::testing::TempDir() + "kestrel_two_arms.xml";
+  {
+    // Arms of length 0.3 m hanging at y = +-0.1 m, a 0.03 m sphere at each tip; both hinges turn
+    // about x, so tip y = +-0.1 + 0.3 sin(q). The base (body 0, whose contacts would end the
+    // joint_targets task's episode) has no collision geometry and a stiff slide joint, held at 0.
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(R"(<mujoco model="two_arms">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base" pos="0 0 1">
+      <joint name="slide" type="slide" axis="1 0 0" limited="true" range="-0.01 0.01"/>
+      <geom type="box" size="0.05 0.15 0.02" mass="1" contype="0" conaffinity="0"/>
+      <body name="arm_l" pos="0 0.1 0">
+        <joint name="hinge_l" type="hinge" axis="1 0 0" limited="true" range="-1.2 1.2"/>
+        <geom type="capsule" fromto="0 0 -0.05 0 0 -0.27" size="0.01" mass="0.1"/>
+        <geom name="tip_l" type="sphere" pos="0 0 -0.3" size="0.03" mass="0.05"/>
+      </body>
+      <body name="arm_r" pos="0 -0.1 0">
+        <joint name="hinge_r" type="hinge" axis="1 0 0" limited="true" range="-1.2 1.2"/>
+        <geom type="capsule" fromto="0 0 -0.05 0 0 -0.27" size="0.01" mass="0.1"/>
+        <geom name="tip_r" type="sphere" pos="0 0 -0.3" size="0.03" mass="0.05"/>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe><key name="home" qpos="0 0 0"/></keyframe>
+</mujoco>
+)",
+               f);
+    std::fclose(f);
+  }
+  struct Run {
+    double min_gap_m = 1e9, final_gap_m = 0, force_l_y = 0, force_r_y = 0;
+  };
+  auto run = [&](bool self) {
+    WorldConfig c = legged("go2", 1);
+    c.robot.model_file = path;
+    c.robot.self_collisions = self;
+    c.robot.action_scale = 0.25_r;
+    std::string err;
+    std::unique_ptr<Simulator> sim = make_simulator(c, err);
+    Run r;
+    EXPECT_TRUE(sim) << err;
+    if (!sim) return r;
+    EXPECT_EQ(sim->num_dofs(), 3);
+    // Targets -0.5 rad (left) and +0.5 rad (right): the tips' targets are y = -+0.044 m, past
+    // each other.
+    const real a[3] = {0, -2, 2};
+    for (int s = 0; s < 100; ++s) {
+      sim->step(a);
+      const real* q = sim->dof_pos();
+      const double yl = 0.1 + 0.3 * std::sin(static_cast<double>(q[1])), yr = -0.1 + 0.3 * std::sin(static_cast<double>(q[2]));
+      r.min_gap_m = std::min(r.min_gap_m, yl - yr);
+      r.final_gap_m = yl - yr;
+    }
+    const real* lf = sim->link_contact_forces_w();
+    r.force_l_y = lf[3 * 1 + 1];
+    r.force_r_y = lf[3 * 2 + 1];
+    EXPECT_EQ(sim->summary().resets, 0u);
+    return r;
+  };
+  const Run off = run(false), on = run(true);
+  EXPECT_LT(off.final_gap_m, -0.05);  // crossed: the targets are 0.088 m past each other
+  EXPECT_EQ(off.force_l_y, 0);
+  // On: the tips (0.03 m spheres) stop where they touch, 0.06 m apart, within the contact margin
+  // and the solver's penetration.
+  EXPECT_GT(on.min_gap_m, 0.06 - 0.005);
+  EXPECT_LT(on.final_gap_m, 0.06 + 0.005);
+  // The PD pushes each arm inwards; the contact pushes the left arm out (+y) and the right one out
+  // (-y), equally.
+  EXPECT_GT(on.force_l_y, 0.5);
+  EXPECT_NEAR(on.force_r_y, -on.force_l_y, 1e-4 * on.force_l_y);
+  std::remove(path.c_str());
+
+  for (const char* robot : {"go2", "anymal_c"}) {
+    WorldConfig c = legged(robot, 1);
+    const Standing a = stand(c);
+    c.robot.self_collisions = true;
+    const Standing b = stand(c);
+    EXPECT_EQ(a.height_m, b.height_m) << robot;
+    EXPECT_EQ(a.force_N, b.force_N) << robot;
+  }
 }

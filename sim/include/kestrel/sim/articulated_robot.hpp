@@ -65,6 +65,7 @@ struct RobotGeom {
   Vec3 pos_b = Vec3::Zero();  // in the body's frame (the world's for body -1)
   Vec4 quat_xyzw_b = Vec4(0, 0, 0, 1);
   real friction = 1;  // sliding friction coefficient
+  int contype = 1, conaffinity = 1;  // MuJoCo's collision bits (a URDF's collision geoms: 1, 1)
 };
 
 struct ArticulatedRobot {

@@ -214,6 +214,11 @@ struct RobotConfig {
   real joint_damping_Nms_rad = -1;
   real joint_friction_loss_Nm = -1;
   real joint_armature_kg_m2 = -1;
+  // Contacts between the robot's own links (legged_gym's asset.self_collisions; off by default as
+  // the issue and legged_gym's ANYmal configuration have it): every pair of collision geoms on two
+  // links that no joint connects directly, filtered by the file's contype / conaffinity bits as
+  // MuJoCo filters them.
+  bool self_collisions = false;
 };
 
 /// Controller config: registry name -> kind, and the Lee family's parameters (LeeParams: gain
