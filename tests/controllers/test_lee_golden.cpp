@@ -2,7 +2,7 @@
 // Aerial Gym's own controller code), within the file's recommended float32 tolerances.
 //
 // The file is streamed with the heap-free pull reader; one controller entry at a time is kept in
-// static storage (keys arrive in file order: params, status, cases, and for lee_rates
+// the shared test scratch (keys arrive in file order: params, status, cases, and for lee_rates
 // partial_torque_only after the cases), then checked through the dispatch table. Inputs are parsed
 // as float32 (the reference's exact values) and widened to `real`. Counts come from the file (any
 // number of cases, up to kMaxCases per controller); tolerances from its conventions.
@@ -16,6 +16,7 @@
 #include "kestrel/kernel/quaternion.hpp"
 #include "ktest.hpp"
 #include "test_io.hpp"
+#include "test_scratch.hpp"
 
 using namespace kestrel;
 
@@ -72,8 +73,8 @@ struct GoldenController {
   float cmd_after_clamp[kMaxCases * 4];
 };
 
-// Static: far too large for an MCU stack frame.
-GoldenController g_ctrl;
+// A GoldenController is far too large for an MCU stack frame (19 KiB): each test takes one from the
+// shared test scratch (test_scratch.hpp) rather than a static holding it for the whole run.
 
 // A failure label "<controller> <field>[<component>] case <id>" in a static buffer, without
 // snprintf (the MCU image has no heap for printf's float formatting).
@@ -452,6 +453,7 @@ void expect_each_lee_kind_once(const int* seen) {
 }  // namespace
 
 KTEST(GoldenControllers, EveryCaseOfEveryControllerMatchesAerialGym) {
+  GoldenController& ctrl = ktest::scratch<GoldenController>();
   ktest::JsonReader r;
   KASSERT_TRUE(r.open(ktest::golden_path("controllers.json")));
   KASSERT_TRUE(r.begin_object());
@@ -480,14 +482,14 @@ KTEST(GoldenControllers, EveryCaseOfEveryControllerMatchesAerialGym) {
       KASSERT_TRUE(r.begin_object());
       char name[64];
       while (r.next_key(name, sizeof name)) {
-        KASSERT_TRUE(parse_controller(r, g_ctrl));
+        KASSERT_TRUE(parse_controller(r, ctrl));
         ControllerKind kind = ControllerKind::direct_motor;
         const bool known = controller_kind_from_name(name, kind);
         KEXPECT_TRUE(known);
         if (!known) continue;
-        const CheckCounts n = check_controller(name, kind, g_ctrl, tol);
+        const CheckCounts n = check_controller(name, kind, ctrl, tol);
         const std::size_t k = static_cast<std::size_t>(kind);
-        cases_in_file[k] += g_ctrl.num_cases;
+        cases_in_file[k] += ctrl.num_cases;
         cases_checked[k] += n.cases;
         values_checked[k] += n.values;
         ++seen[k];
@@ -533,6 +535,7 @@ void expect_preset_matches(const LeeParams& p, const GoldenController& c, const 
 }  // namespace
 
 KTEST(GoldenControllers, PresetsMatchReferenceParams) {
+  GoldenController& ctrl = ktest::scratch<GoldenController>();
   ktest::JsonReader r;
   KASSERT_TRUE(r.open(ktest::golden_path("controllers.json")));
   KASSERT_TRUE(r.begin_object());
@@ -541,10 +544,10 @@ KTEST(GoldenControllers, PresetsMatchReferenceParams) {
   int seen[kNumControllerKinds] = {};
   char name[64];
   while (r.next_key(name, sizeof name)) {
-    KASSERT_TRUE(parse_controller(r, g_ctrl));
-    const bool rov = key_is(g_ctrl.robot, "base_rov");
-    KEXPECT_TRUE(rov || key_is(g_ctrl.robot, "base_quadrotor"));
-    expect_preset_matches(rov ? lee_params_rov() : lee_params_base_quadrotor(), g_ctrl, name);
+    KASSERT_TRUE(parse_controller(r, ctrl));
+    const bool rov = key_is(ctrl.robot, "base_rov");
+    KEXPECT_TRUE(rov || key_is(ctrl.robot, "base_quadrotor"));
+    expect_preset_matches(rov ? lee_params_rov() : lee_params_base_quadrotor(), ctrl, name);
     ControllerKind kind = ControllerKind::direct_motor;
     KEXPECT_TRUE(controller_kind_from_name(name, kind));
     ++seen[static_cast<std::size_t>(kind)];

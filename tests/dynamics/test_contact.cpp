@@ -9,6 +9,7 @@
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/kernel/rng.hpp"
 #include "ktest.hpp"
+#include "test_scratch.hpp"
 
 using namespace kestrel;
 namespace dy = kestrel::dynamics;
@@ -35,6 +36,16 @@ void free_body(dy::MultibodyModel<1>& m, const dy::SpatialInertia& b) {
 }
 
 using FreeData = dy::ConstraintData<1, 8>;
+
+// A test's model, its dynamics scratch and the solver's data, taken together from the shared test
+// scratch (test_scratch.hpp): up to 14 KiB each (a five-body tree with 8 contacts), too big for an
+// MCU test's stack and, as statics of every test, 46 KiB of the core test image's RAM.
+template <int kBodies, int kContacts>
+struct World {
+  dy::MultibodyModel<kBodies> m;
+  dy::MultibodyData<kBodies> d;
+  dy::ConstraintData<kBodies, kContacts> cd;
+};
 
 // A floating base with two legs of two links each (bodies 1-2 and 3-4), joint axes along y; the
 // joint kinds, axes and offsets vary per test through `leg`.
@@ -66,9 +77,10 @@ Status step_free(const dy::MultibodyModel<1>& m, dy::MultibodyData<1>& d, FreeDa
 }  // namespace
 
 KTEST(Contact, SphereBouncesToTheHeightItsRestitutionGives) {
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static FreeData cd;
+  auto& w = ktest::scratch<World<1, 8>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   const real r = 0.1_r;
   free_body(m, solid(1, Vec3::Constant(real(0.4) * r * r)));
   dy::CollisionShape ball;
@@ -94,9 +106,10 @@ KTEST(Contact, SphereBouncesToTheHeightItsRestitutionGives) {
 }
 
 KTEST(Contact, BoxOnASlopeStaysOrSlidesByCoulomb) {
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static FreeData cd;
+  auto& w = ktest::scratch<World<1, 8>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   const real h = 0.1_r, mass = 2;
   free_body(m, solid(mass, Vec3::Constant(mass * (h * h + h * h) * 4 / 12)));
   const real theta = 20 * kPi / 180;
@@ -138,9 +151,10 @@ KTEST(Contact, BoxOnASlopeStaysOrSlidesByCoulomb) {
 }
 
 KTEST(Contact, PendulumComesToRestOnItsLimit) {
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static dy::ConstraintData<1, 1> cd;
+  auto& w = ktest::scratch<World<1, 1>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   const real mass = 1, l = 0.5_r;
   m.num_bodies = 1;
   m.parent[0] = -1;
@@ -168,9 +182,10 @@ KTEST(Contact, PendulumComesToRestOnItsLimit) {
 }
 
 KTEST(Contact, JointDryFrictionHoldsBelowBreakawayAndSlipsAbove) {
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static dy::ConstraintData<1, 1> cd;
+  auto& w = ktest::scratch<World<1, 1>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   m.num_bodies = 1;
   m.parent[0] = -1;
   m.joint[0] = dy::JointType::revolute;
@@ -197,10 +212,11 @@ KTEST(Contact, JointDryFrictionHoldsBelowBreakawayAndSlipsAbove) {
 KTEST(Contact, FloatingTreeSpawnedInTheGroundStaysFinite) {
   // A base with two legs of two links each, spheres on every link, spawned up to 20 cm deep in the
   // ground, under random joint torques of up to 50 N m with limits and dry friction.
-  static dy::MultibodyModel<5> m;
-  static dy::MultibodyData<5> d;
-  static dy::ConstraintData<5, 8> cd;
-  two_legged_tree(m, [](int i) {
+  auto& w = ktest::scratch<World<5, 8>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
+  two_legged_tree(m, [&m](int i) {
     m.X_tree[i].r = m.parent[i] == 0 ? Vec3(i == 1 ? 0.2_r : -0.2_r, 0, 0) : Vec3(0, 0, -0.2_r);
     m.body[i] = solid(0.5_r, Vec3::Constant(real(2e-3)));
     m.body[i].com = Vec3(0, 0, -0.1_r);
@@ -235,9 +251,10 @@ KTEST(Contact, FloatingTreeSpawnedInTheGroundStaysFinite) {
 }
 
 KTEST(Contact, RefusalsLeaveTheStateAlone) {
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static FreeData cd;
+  auto& w = ktest::scratch<World<1, 8>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   free_body(m, solid(1, Vec3::Constant(real(0.01))));
   real q[7] = {0, 0, 0.05_r, 0, 0, 0, 1}, qd[6] = {0, 0, -1, 0, 0, 0};
   const real q0[7] = {0, 0, 0.05_r, 0, 0, 0, 1};
@@ -280,10 +297,11 @@ KTEST(Contact, RefusalsLeaveTheStateAlone) {
 KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
   // The mass-matrix path (CRBA and the branch-sparse L^T D L solve) against ABA's: a floating base
   // with two two-link legs, damped joints, random states and torques, one step each.
-  static dy::MultibodyModel<5> m;
-  static dy::MultibodyData<5> d;
-  static dy::ConstraintData<5, 1> cd;
-  two_legged_tree(m, [](int i) {
+  auto& w = ktest::scratch<World<5, 1>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
+  two_legged_tree(m, [&m](int i) {
     m.joint[i] = i % 2 ? dy::JointType::revolute : dy::JointType::prismatic;
     m.axis[i] = i < 3 ? Vec3(0, 1, 0) : Vec3(0.6_r, 0, 0.8_r);
     m.X_tree[i].r = Vec3(0.1_r * i, -0.05_r, -0.2_r);
@@ -322,9 +340,10 @@ KTEST(Contact, WithoutConstraintsItIsTheSemiImplicitStep) {
 KTEST(Contact, ARowNothingCanMoveGetsNoImpulse) {
   // A welded base (no degrees of freedom) in the ground with an arm on a hinge above it: the
   // base's contact rows are all zero and must neither divide by zero nor stop the arm's step.
-  static dy::MultibodyModel<2> m;
-  static dy::MultibodyData<2> d;
-  static dy::ConstraintData<2, 2> cd;
+  auto& w = ktest::scratch<World<2, 2>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   m.num_bodies = 2;
   m.parent[0] = -1;
   m.joint[0] = dy::JointType::fixed;
@@ -352,9 +371,10 @@ KTEST(Contact, ARowNothingCanMoveGetsNoImpulse) {
 KTEST(Contact, ImplicitDriveGainsKeepALightJointStable) {
   // A light link (I = 0.003 kg m^2 about a vertical axis) under PD kp = 40 N m/rad, kd = 2 N m s/rad
   // at h = 5 ms: kd h / I = 3.3 > 2, so the explicit PD diverges; taken implicitly it settles.
-  static dy::MultibodyModel<1> m;
-  static dy::MultibodyData<1> d;
-  static dy::ConstraintData<1, 1> cd;
+  auto& w = ktest::scratch<World<1, 1>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
   m.num_bodies = 1;
   m.parent[0] = -1;
   m.joint[0] = dy::JointType::revolute;
@@ -468,7 +488,7 @@ struct Gripper {
 // same motions leave it on the ground. Both of PGS's residual orders (serial, four partial sums)
 // hold it.
 KTEST(Contact, AFrictionGraspLiftsTheCubeAndHoldsIt) {
-  static Gripper g;
+  Gripper& g = ktest::scratch<Gripper>();  // 24 KiB: the largest of these tests
   for (int variant = 0; variant < 4; ++variant) {
     const real mu = variant % 2 == 0 ? real(1) : real(0.1);
     g.build(mu);

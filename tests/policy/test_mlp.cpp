@@ -10,6 +10,7 @@
 #include "kestrel/kernel/rng.hpp"
 #include "kestrel/policy/mlp.hpp"
 #include "ktest.hpp"
+#include "test_scratch.hpp"
 // The trained Go2 walking policy (issue 13) and observations recorded with it walking, with the
 // actions the host's core gave (bench/python/export_go2_policy.py).
 #include "../../platform/firmware/go2_flat_policy.hpp"
@@ -26,6 +27,7 @@ using TestMlp = pl::MlpParams<13, 64, 64, 4>;
 void random_mlp(TestMlp& p, pl::Activation a, std::uint32_t seed) {
   RngStream r(seed, 0, kPurposeUser);
   p.activation = a;
+  p.output_squash = pl::Squash::none;  // a test that wants the squash sets it after
   for (int i = 0; i < 13; ++i) {
     p.obs_mean[i] = r.uniform(-0.5_r, 0.5_r);
     p.obs_inv_std[i] = r.uniform(0.5_r, 2);
@@ -82,20 +84,14 @@ void reference_forward(const TestMlp& p, const real* obs, double* y) {
   }
 }
 
-// Static storage, as firmware keeps it (4.7 K floats: too big for an MCU test's stack). The small
-// networks of PartsLeftOutGiveTheSameBitsAsTheirIdentity share it (the netduinoplus2 test image
-// is short of RAM); every test fills the network it uses before using it.
+// 4.7 K floats: too big for an MCU test's stack. Each test takes the network it uses from the
+// shared test scratch (test_scratch.hpp; the netduinoplus2 test image is short of RAM) and fills it.
 using FullMlp = pl::MlpParams<13, 16, 16, 4>;
 using LeanMlp = pl::MlpParams<13, 16, 16, 4, 0u>;  // no normalisation, no action clamp
-union NetworkStorage {
-  TestMlp big;
-  struct {
-    FullMlp full;
-    LeanMlp lean;
-  } small;
+struct FullAndLean {
+  FullMlp full;
+  LeanMlp lean;
 };
-NetworkStorage g_networks;
-TestMlp& g_mlp = g_networks.big;
 
 }  // namespace
 
@@ -126,22 +122,23 @@ KTEST(PolicyMath, ExpAndTanhMatchTheLibrary) {
 }
 
 KTEST(PolicyMlp, ForwardMatchesDoubleReference) {
+  TestMlp& mlp = ktest::scratch<TestMlp>();
   for (int a = 0; a < 4; ++a) {
     // tanh, ELU, ReLU; then ELU with a tanh-squashed output (rsl_rl with squash, scaled actions).
     const pl::Activation act = static_cast<pl::Activation>(a < 3 ? a : 1);
-    random_mlp(g_mlp, act, 11);
-    g_mlp.output_squash = a == 3 ? pl::Squash::tanh : pl::Squash::none;
-    KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::ok);
+    random_mlp(mlp, act, 11);
+    mlp.output_squash = a == 3 ? pl::Squash::tanh : pl::Squash::none;
+    KEXPECT_TRUE(pl::validate_mlp(mlp) == Status::ok);
     RngStream r(12, 0, kPurposeUser);
     double worst = 0;
     for (int n = 0; n < 500; ++n) {
       real obs[13], action[4] = {};
       for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-3, 3);
       Status st = Status::invalid_argument;
-      KEXPECT_NO_HEAP(st = pl::mlp_forward(g_mlp, obs, action));
+      KEXPECT_NO_HEAP(st = pl::mlp_forward(mlp, obs, action));
       KEXPECT_TRUE(st == Status::ok);
       double ref[4];
-      reference_forward(g_mlp, obs, ref);
+      reference_forward(mlp, obs, ref);
       for (int o = 0; o < 4; ++o) {
         // numpy.allclose's measure: |a - ref| <= atol + rtol |ref| with rtol = atol = 1e-5; `worst`
         // is the largest |a - ref| - rtol |ref| (float accumulation over 64 terms gives ~1e-6).
@@ -151,31 +148,31 @@ KTEST(PolicyMlp, ForwardMatchesDoubleReference) {
     }
     KEXPECT_LT(worst, 1e-5);
   }
-  g_mlp.output_squash = pl::Squash::none;
 }
 
 KTEST(PolicyMlp, RefusesNonFiniteInputsAndWeights) {
-  random_mlp(g_mlp, pl::Activation::tanh, 3);
+  TestMlp& mlp = ktest::scratch<TestMlp>();
+  random_mlp(mlp, pl::Activation::tanh, 3);
   real obs[13] = {}, action[4] = {9, 9, 9, 9};
   obs[5] = std::numeric_limits<real>::quiet_NaN();
-  KEXPECT_TRUE(pl::mlp_forward(g_mlp, obs, action) == Status::non_finite_input);
+  KEXPECT_TRUE(pl::mlp_forward(mlp, obs, action) == Status::non_finite_input);
   KEXPECT_TRUE(action[0] == 9 && action[3] == 9);  // untouched: the caller holds its last command
   obs[5] = std::numeric_limits<real>::infinity();
-  KEXPECT_TRUE(pl::mlp_forward(g_mlp, obs, action) == Status::non_finite_input);
+  KEXPECT_TRUE(pl::mlp_forward(mlp, obs, action) == Status::non_finite_input);
   obs[5] = 1e30_r;  // huge but finite: clipped by the normalisation, finite action
-  KEXPECT_TRUE(pl::mlp_forward(g_mlp, obs, action) == Status::ok);
+  KEXPECT_TRUE(pl::mlp_forward(mlp, obs, action) == Status::ok);
   KEXPECT_TRUE(all_finite(action, 4));
-  g_mlp.hidden2.weight[3][7] = std::numeric_limits<real>::quiet_NaN();
-  KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::invalid_argument);
-  random_mlp(g_mlp, pl::Activation::tanh, 3);
-  g_mlp.action_low[1] = 2;  // low > high
-  KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::invalid_argument);
-  random_mlp(g_mlp, pl::Activation::tanh, 3);
-  g_mlp.obs_clip = 0;
-  KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::invalid_argument);
-  random_mlp(g_mlp, pl::Activation::tanh, 3);
-  g_mlp.activation = static_cast<pl::Activation>(7);
-  KEXPECT_TRUE(pl::validate_mlp(g_mlp) == Status::invalid_argument);
+  mlp.hidden2.weight[3][7] = std::numeric_limits<real>::quiet_NaN();
+  KEXPECT_TRUE(pl::validate_mlp(mlp) == Status::invalid_argument);
+  random_mlp(mlp, pl::Activation::tanh, 3);
+  mlp.action_low[1] = 2;  // low > high
+  KEXPECT_TRUE(pl::validate_mlp(mlp) == Status::invalid_argument);
+  random_mlp(mlp, pl::Activation::tanh, 3);
+  mlp.obs_clip = 0;
+  KEXPECT_TRUE(pl::validate_mlp(mlp) == Status::invalid_argument);
+  random_mlp(mlp, pl::Activation::tanh, 3);
+  mlp.activation = static_cast<pl::Activation>(7);
+  KEXPECT_TRUE(pl::validate_mlp(mlp) == Status::invalid_argument);
 }
 
 #if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
@@ -306,16 +303,17 @@ KTEST(PolicyMlp, LayerLoopsSameBitsAsThePlainLoops) {
 }
 
 KTEST(PolicyMlp, SameBitsOnEveryTarget) {
+  TestMlp& mlp = ktest::scratch<TestMlp>();
   // FNV-1a over the bits of 1000 inferences per activation. The constant is the host's; the MCU
   // images run this same test, so a target that rounds differently fails here.
   std::uint64_t h = 1469598103934665603ull;
   for (int a = 0; a < 3; ++a) {
-    random_mlp(g_mlp, static_cast<pl::Activation>(a), 21);
+    random_mlp(mlp, static_cast<pl::Activation>(a), 21);
     RngStream r(22, 0, kPurposeUser);
     for (int n = 0; n < 1000; ++n) {
       real obs[13], action[4] = {};
       for (int i = 0; i < 13; ++i) obs[i] = r.uniform(-4, 4);
-      if (pl::mlp_forward(g_mlp, obs, action) != Status::ok) h ^= 0xdead;
+      if (pl::mlp_forward(mlp, obs, action) != Status::ok) h ^= 0xdead;
       unsigned char b[sizeof action];
       std::memcpy(b, action, sizeof action);
       for (unsigned char c : b) {
@@ -362,8 +360,9 @@ KTEST(PolicyMlp, PartsLeftOutGiveTheSameBitsAsTheirIdentity) {
   static_assert(sizeof(LeanMlp) + 26 * sizeof(real) + sizeof(real) + 8 * sizeof(real) - 8 <= sizeof(FullMlp),
                 "the parts left out take no room");
   RngStream r(31, 0, kPurposeUser);
-  FullMlp& f = g_networks.small.full;
-  LeanMlp& g_lean = g_networks.small.lean;
+  FullAndLean& nets = ktest::scratch<FullAndLean>();
+  FullMlp& f = nets.full;
+  LeanMlp& g_lean = nets.lean;
   f.activation = pl::Activation::elu;
   f.output_squash = pl::Squash::tanh;
   f.obs_clip = 3.0e38_r;
