@@ -426,9 +426,13 @@ void write_csv(const std::string& path) {
     std::exit(1);
   }
   std::fprintf(f, "case,envs,threads,env_steps_per_s,ns_per_env_step,note\n");
-  for (const Row& r : g_rows)
-    std::fprintf(f, "%s,%d,%d,%.6g,%.6g,%s\n", r.name.c_str(), r.envs, r.threads, r.env_steps_per_s, r.ns_per_env_step,
-                 r.note.c_str());
+  for (const Row& r : g_rows) {
+    // The note is quoted (it may hold commas: "AVX2 copy, 8 lanes"), its quotes doubled (RFC 4180).
+    std::string note;
+    for (char ch : r.note) note += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+    std::fprintf(f, "%s,%d,%d,%.6g,%.6g,\"%s\"\n", r.name.c_str(), r.envs, r.threads, r.env_steps_per_s, r.ns_per_env_step,
+                 note.c_str());
+  }
   std::fclose(f);
   std::printf("\nwrote %s\n", path.c_str());
 }
