@@ -20,8 +20,10 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 #include <nanobind/stl/pair.h>
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/unique_ptr.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -225,10 +227,33 @@ nb::dict summary_dict(const ks::WorldSummary& s) {
 
 // ---- Simulator ---------------------------------------------------------------------------------------
 
+// A Python viewer (kestrel.viewer.Viewer or any object with its set_viewer_camera(position,
+// lookat) and draw_debug_vis(height_samples, contacts)) behind the Simulator's viewer hooks.
+struct PyViewerHooks final : ks::Simulator::ViewerHooks {
+  nb::object viewer;
+  void on_viewer_request(const ks::Simulator::ViewerRequest& r) override {
+    nb::gil_scoped_acquire gil;
+    if (r.camera_set) {
+      const kestrel::Vec3 &p = r.camera_position_w, &l = r.camera_lookat_w;
+      viewer.attr("set_viewer_camera")(nb::make_tuple(p[0], p[1], p[2]), nb::make_tuple(l[0], l[1], l[2]));
+    }
+    viewer.attr("draw_debug_vis")(r.debug_height_samples, r.debug_contacts);
+  }
+};
+
 struct KSimulator {
   std::unique_ptr<ks::Simulator> owned;  // null for a Task's simulator (Task.simulator), which the Task owns
   ks::Simulator* sim = nullptr;
+  std::unique_ptr<PyViewerHooks> viewer;  // attach_viewer's adapter
   std::size_t robots() const { return static_cast<std::size_t>(sim->num_robots()); }
+  ~KSimulator() {
+    if (viewer && sim != nullptr) sim->set_viewer(nullptr);
+  }
+  KSimulator(std::unique_ptr<ks::Simulator> o, ks::Simulator* s) : owned(std::move(o)), sim(s) {}
+  KSimulator(const KSimulator&) = delete;
+  KSimulator& operator=(const KSimulator&) = delete;
+  KSimulator(KSimulator&&) = default;
+  KSimulator& operator=(KSimulator&&) = default;
 };
 
 // Range / segmentation images (Simulator::range_image, World::sensor_segmentation) as read-only
@@ -775,7 +800,7 @@ NB_MODULE(_core, m) {
           "simulator",
           [](KTask& p) {
             // A non-owning Simulator over the task's own; keep_alive below holds the task while it lives.
-            return new KSimulator{nullptr, &p.t().simulator()};
+            return new KSimulator(nullptr, &p.t().simulator());
           },
           nb::rv_policy::take_ownership, nb::keep_alive<0, 1>(),
           "The Simulator the task steps (its views, world_data(), obstacles(), ...), kept alive with the task.\n"
@@ -1069,7 +1094,7 @@ NB_MODULE(_core, m) {
             }
             if (!s) throw nb::value_error((c.source + ": " + err).c_str());
             ks::Simulator* raw = s.get();
-            new (self) KSimulator{std::move(s), raw};
+            new (self) KSimulator(std::move(s), raw);
           },
           "config"_a, "backend"_a = "")
       .def_prop_ro("backend", [](KSimulator& s) { return std::string(s.sim->backend_name()); })
@@ -1108,6 +1133,48 @@ NB_MODULE(_core, m) {
           },
           "env_ids"_a)
       .def("push_robots", [](KSimulator& s) { s.sim->push_robots(); })
+      .def(
+          "set_viewer_camera",
+          [](KSimulator& s, const std::array<double, 3>& position, const std::array<double, 3>& lookat) {
+            const kestrel::Vec3 p(static_cast<real>(position[0]), static_cast<real>(position[1]), static_cast<real>(position[2]));
+            const kestrel::Vec3 l(static_cast<real>(lookat[0]), static_cast<real>(lookat[1]), static_cast<real>(lookat[2]));
+            if (!s.sim->set_viewer_camera(p, l)) throw nb::value_error(s.sim->last_error().c_str());
+          },
+          "position"_a, "lookat"_a,
+          "LeggedGym-Ex's set_viewer_camera (m, world frame): kept, and handed to the attached viewer (attach_viewer).")
+      .def(
+          "draw_debug_vis", [](KSimulator& s, bool height_samples, bool contacts) { s.sim->draw_debug_vis(height_samples, contacts); },
+          "height_samples"_a = true, "contacts"_a = true,
+          "LeggedGym-Ex's draw_debug_vis: the attached viewer draws the height samples and / or the contacts and their forces.")
+      .def(
+          "attach_viewer",
+          [](KSimulator& s, nb::object viewer) {
+            if (viewer.is_none()) {
+              s.sim->set_viewer(nullptr);
+              s.viewer.reset();
+              return;
+            }
+            for (const char* method : {"set_viewer_camera", "draw_debug_vis"})
+              if (!nb::hasattr(viewer, method))
+                throw nb::type_error((std::string("attach_viewer: the viewer has no ") + method + " method (kestrel.viewer.Viewer has both)").c_str());
+            auto hooks = std::make_unique<PyViewerHooks>();
+            hooks->viewer = viewer;
+            s.sim->set_viewer(nullptr);
+            s.viewer = std::move(hooks);
+            s.sim->set_viewer(s.viewer.get());  // hands it the camera and debug request made so far
+          },
+          "viewer"_a.none(), "Attach a viewer (None detaches): it gets set_viewer_camera / draw_debug_vis requests.")
+      .def_prop_ro("viewer_request",
+                   [](KSimulator& s) {
+                     const ks::Simulator::ViewerRequest& r = s.sim->viewer_request();
+                     nb::dict d;
+                     d["camera_set"] = r.camera_set;
+                     d["camera_position_w"] = nb::make_tuple(r.camera_position_w[0], r.camera_position_w[1], r.camera_position_w[2]);
+                     d["camera_lookat_w"] = nb::make_tuple(r.camera_lookat_w[0], r.camera_lookat_w[1], r.camera_lookat_w[2]);
+                     d["debug_height_samples"] = r.debug_height_samples;
+                     d["debug_contacts"] = r.debug_contacts;
+                     return d;
+                   })
       .def(
           "set_auto_reset", [](KSimulator& s, bool on) { s.sim->set_auto_reset(on); }, "on"_a,
           "False: step() only flags reset_buf for ended episodes; the caller reads the final state and calls reset_idx.")

@@ -291,6 +291,41 @@ def test_draw_debug_vis_draws_height_samples_and_contacts():
         v.close()
 
 
+def test_simulator_hooks_reach_the_attached_viewer():
+    """LeggedGym-Ex's set_viewer_camera / draw_debug_vis on the Simulator: kept before a viewer
+    attaches, handed to it on attach and on every later call; bad input refused by name."""
+    sim = kestrel.make_simulator({"sim": "fast_sim", "robot": "go2", "task": "joint_targets", "env": "empty"},
+                                 num_envs=1, seed=1, threads=1)
+    sim.set_viewer_camera((0.0, -3.0, 2.0), (0.0, 0.0, 0.3))
+    with pytest.raises(ValueError, match="must differ"):
+        sim.set_viewer_camera((1, 1, 1), (1, 1, 1))
+    with pytest.raises(ValueError, match="finite"):
+        sim.set_viewer_camera((math.nan, 0, 0), (0, 0, 0))
+    req = sim.viewer_request
+    assert req["camera_set"] and req["camera_position_w"] == (0.0, -3.0, 2.0)
+    assert not req["debug_contacts"]
+    with pytest.raises(TypeError, match="no set_viewer_camera"):
+        sim.attach_viewer(object())
+    for _ in range(40):
+        sim.step(None)
+    fr = record.capture_frame(sim, [0], 40, 0.8)
+    v = viewer.Viewer(sim.scene_info(), 1, [0], port=0)
+    try:
+        sim.attach_viewer(v)  # the camera asked for above reaches the page's camera
+        np.testing.assert_allclose(v.server.initial_camera.position, (0, -3, 2))
+        np.testing.assert_allclose(v.server.initial_camera.look_at, (0, 0, 0.3), atol=1e-6)
+        v.draw(fr)
+        nodes = v.scene._handle_from_node_name
+        assert "/debug/contacts" not in nodes or len(nodes["/debug/contacts"].points) == 0
+        sim.draw_debug_vis(height_samples=False, contacts=True)  # through the Simulator
+        assert len(nodes["/debug/contacts"].points) >= 2  # the standing robot's feet
+        sim.attach_viewer(None)
+        sim.set_viewer_camera((0.0, -6.0, 4.0), (0.0, 0.0, 0.0))  # detached: kept, not sent
+        np.testing.assert_allclose(v.server.initial_camera.position, (0, -3, 2))
+    finally:
+        v.close()
+
+
 def test_task_run_with_record_has_the_cxx_hash(tmp_path, kestrel_cli):
     args = ["--task", "navigation_task", "--envs", "2", "--steps", "30", "--threads", "1", "--seed", "1"]
     out = io.StringIO()

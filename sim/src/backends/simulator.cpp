@@ -146,6 +146,29 @@ bool Simulator::reset_root_states(const int* env_ids, int count, const real* pos
   return set_root_states(env_ids, count, pos_w, quat_xyzw, lin_vel_w, ang_vel_w);
 }
 
+bool Simulator::set_viewer_camera(const Vec3& position_w, const Vec3& lookat_w) {
+  if (!position_w.allFinite() || !lookat_w.allFinite())
+    return fail(std::string("simulator ") + backend_name() + ": set_viewer_camera: position and lookat must be finite");
+  if (position_w == lookat_w)
+    return fail(std::string("simulator ") + backend_name() + ": set_viewer_camera: position and lookat must differ");
+  viewer_request_.camera_set = true;
+  viewer_request_.camera_position_w = position_w;
+  viewer_request_.camera_lookat_w = lookat_w;
+  if (viewer_ != nullptr) viewer_->on_viewer_request(viewer_request_);
+  return true;
+}
+
+void Simulator::draw_debug_vis(bool height_samples, bool contacts) {
+  viewer_request_.debug_height_samples = height_samples;
+  viewer_request_.debug_contacts = contacts;
+  if (viewer_ != nullptr) viewer_->on_viewer_request(viewer_request_);
+}
+
+void Simulator::set_viewer(ViewerHooks* viewer) {
+  viewer_ = viewer;
+  if (viewer_ != nullptr) viewer_->on_viewer_request(viewer_request_);
+}
+
 void Simulator::push_robots() {
   const real m = cfg_.simulator.max_push_vel_xy_m_s;
   for (int e = 0; e < num_envs_; ++e) {

@@ -191,6 +191,39 @@ TEST(SimulatorRigid, PushRobotsBoundedAndDeterministic) {
   EXPECT_EQ(a->state_hash(), b->state_hash());
 }
 
+// LeggedGym-Ex's set_viewer_camera / draw_debug_vis: the request is kept, refused with its reason
+// when bad (nothing changed), handed to an attached viewer at once and to one attached later.
+TEST(SimulatorViewerHooks, RequestsReachTheAttachedViewer) {
+  EnvVarGuard g;
+  std::string err;
+  std::unique_ptr<Simulator> sim = make_simulator(rigid_config(2), Backend::rigid, err);
+  ASSERT_TRUE(sim) << err;
+  struct Recorder : Simulator::ViewerHooks {
+    std::vector<Simulator::ViewerRequest> got;
+    void on_viewer_request(const Simulator::ViewerRequest& r) override { got.push_back(r); }
+  } rec;
+  EXPECT_FALSE(sim->viewer_request().camera_set);
+  ASSERT_TRUE(sim->set_viewer_camera(Vec3(0, -8, 6), Vec3(0, 0, 1)));  // before any viewer: kept
+  EXPECT_FALSE(sim->set_viewer_camera(Vec3(1, 1, 1), Vec3(1, 1, 1)));
+  EXPECT_NE(sim->last_error().find("must differ"), std::string::npos) << sim->last_error();
+  EXPECT_FALSE(sim->set_viewer_camera(Vec3(std::numeric_limits<real>::quiet_NaN(), 0, 0), Vec3::Zero()));
+  EXPECT_NE(sim->last_error().find("finite"), std::string::npos) << sim->last_error();
+  EXPECT_EQ(sim->viewer_request().camera_position_w, Vec3(0, -8, 6));  // the refused calls changed nothing
+  sim->set_viewer(&rec);
+  ASSERT_EQ(rec.got.size(), 1u);
+  EXPECT_TRUE(rec.got[0].camera_set);
+  EXPECT_EQ(rec.got[0].camera_lookat_w, Vec3(0, 0, 1));
+  EXPECT_FALSE(rec.got[0].debug_contacts);
+  sim->draw_debug_vis(true, false);
+  ASSERT_EQ(rec.got.size(), 2u);
+  EXPECT_TRUE(rec.got[1].debug_height_samples);
+  EXPECT_FALSE(rec.got[1].debug_contacts);
+  sim->set_viewer(nullptr);
+  sim->draw_debug_vis(true, true);  // detached: kept, not sent
+  EXPECT_EQ(rec.got.size(), 2u);
+  EXPECT_TRUE(sim->viewer_request().debug_contacts);
+}
+
 TEST(SimulatorSelect, EnvironmentVariableAndScenario) {
   EnvVarGuard g;
   std::string err;

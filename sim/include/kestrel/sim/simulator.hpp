@@ -158,6 +158,28 @@ class Simulator {
   virtual void set_curriculum_level(real level) = 0;
   /// The environment's bounds for its current episode (drawn at each reset).
   virtual void env_bounds(int env, Vec3& lower_w, Vec3& upper_w) const = 0;
+  /// LeggedGym-Ex's set_viewer_camera and draw_debug_vis: hooks that a viewer fills. The
+  /// simulator keeps the latest request (viewer_request()) and hands it to the viewer attached with
+  /// set_viewer (the Python Viewer through Simulator.attach_viewer), at once and again when a
+  /// viewer attaches later; without one, nothing is drawn. Setting up, not stepping: may allocate.
+  struct ViewerRequest {
+    bool camera_set = false;
+    Vec3 camera_position_w = Vec3::Zero(), camera_lookat_w = Vec3::Zero();  // m, world frame
+    bool debug_height_samples = false, debug_contacts = false;  // measured_heights points; contacts and forces
+  };
+  class ViewerHooks {
+   public:
+    virtual ~ViewerHooks() = default;
+    virtual void on_viewer_request(const ViewerRequest& request) = 0;
+  };
+  /// The viewer's camera at position_w looking at lookat_w. False (nothing changed, last_error()
+  /// says why) for a non-finite point or two equal ones.
+  [[nodiscard]] bool set_viewer_camera(const Vec3& position_w, const Vec3& lookat_w);
+  /// From now on the viewer also draws the height samples and / or the contacts with their forces.
+  void draw_debug_vis(bool height_samples, bool contacts);
+  /// Attaches a viewer (not owned; nullptr detaches) and hands it the current request.
+  void set_viewer(ViewerHooks* viewer);
+  const ViewerRequest& viewer_request() const { return viewer_request_; }
   /// legged_gym's _push_robots: every robot's world-frame v_x and v_y are set to values drawn
   /// uniformly in [-max_push_vel_xy_m_s, max_push_vel_xy_m_s] from its environment's push stream.
   void push_robots();
@@ -350,6 +372,8 @@ class Simulator {
   std::vector<real> env_origins_w_;                  // (envs x 3)
   std::vector<RngStream> rng_push_;
   RobotLayout layout_;
+  ViewerRequest viewer_request_;
+  ViewerHooks* viewer_ = nullptr;
   std::string error_;
 };
 
