@@ -51,6 +51,7 @@ const char* geom_type_name(ks::RobotGeomType t) {
     case ks::RobotGeomType::ellipsoid: return "ellipsoid";
     case ks::RobotGeomType::cylinder: return "cylinder";
     case ks::RobotGeomType::box: return "box";
+    case ks::RobotGeomType::mesh: return "mesh";
   }
   return "?";
 }

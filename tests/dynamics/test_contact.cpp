@@ -587,3 +587,52 @@ KTEST(Contact, ShapePairsGiveTheirContacts) {
   KEXPECT_CLOSE(c[0].point_w[0], 0, 1e-6, 0, "at the crossing");
   KEXPECT_CLOSE(c[0].point_w[2], 0.005, 1e-6, 0, "on b's surface");
 }
+
+// A convex shape (a collision mesh's hull points) against a half-space: the vertices below the
+// margin, at most kMaxConvexContacts of them, the deepest; a cube's 8 corners resting on the
+// plane give its 4 bottom corners, and a 12-point shape tilted into the ground gives its 8
+// deepest. The points are where a box of the same size has its corners.
+KTEST(Contact, ConvexPointsCollideWithAHalfSpaceThroughTheirDeepestVertices) {
+  Vec3 corners[8];
+  for (int k = 0; k < 8; ++k) corners[k] = Vec3((k & 1) ? 0.1_r : -0.1_r, (k & 2) ? 0.1_r : -0.1_r, (k & 4) ? 0.1_r : -0.1_r);
+  dy::CollisionShape cube;
+  cube.body = 0;
+  cube.type = dy::ShapeType::convex;
+  cube.points = corners;
+  cube.num_points = 8;
+  dy::Transform X[1];
+  X[0].E = Mat3::Identity();
+  X[0].r = Vec3(0, 0, 0.1_r - 0.001_r);  // 1 mm into the ground
+  dy::ContactPoint c[16];
+  KASSERT_EQ(dy::collide_halfspace(&cube, 1, X, dy::HalfSpace(), 0.005_r, c, 16), 4);
+  for (int i = 0; i < 4; ++i) {
+    KEXPECT_NEAR(c[i].separation_m, -0.001_r, 1e-6_r);
+    KEXPECT_NEAR(c[i].point_w[2], -0.001_r, 1e-6_r);
+    KEXPECT_EQ(c[i].body, 0);
+    KEXPECT_EQ(c[i].body_b, -1);
+  }
+  // The same as the box primitive's corners, in the same order.
+  dy::CollisionShape box = cube;
+  box.type = dy::ShapeType::box;
+  box.size = Vec3(0.1_r, 0.1_r, 0.1_r);
+  dy::ContactPoint cb[16];
+  KASSERT_EQ(dy::collide_halfspace(&box, 1, X, dy::HalfSpace(), 0.005_r, cb, 16), 4);
+  for (int i = 0; i < 4; ++i) KEXPECT_NEAR((c[i].point_w - cb[i].point_w).norm(), 0, 1e-6_r);
+  // 12 points, all below the plane at different depths: the 8 deepest, in vertex order.
+  Vec3 line[12];
+  for (int k = 0; k < 12; ++k) line[k] = Vec3(0.01_r * k, 0, -0.001_r * static_cast<real>((k * 5) % 12));
+  dy::CollisionShape stick = cube;
+  stick.points = line;
+  stick.num_points = 12;
+  X[0].r = Vec3::Zero();
+  KASSERT_EQ(dy::collide_halfspace(&stick, 1, X, dy::HalfSpace(), 0.0005_r, c, 16), 8);
+  real shallowest = -1;
+  for (int i = 0; i < 8; ++i) shallowest = c[i].separation_m > shallowest ? c[i].separation_m : shallowest;
+  KEXPECT_NEAR(shallowest, -0.004_r, 1e-6_r);  // depths 0..11 mm: the deepest 8 are 4..11 mm
+  for (int i = 1; i < 8; ++i) KEXPECT_TRUE(c[i].point_w[0] > c[i - 1].point_w[0]);  // vertex order kept
+  // Convex shapes give no contact with other shapes (collide_shapes: half-spaces only).
+  dy::CollisionShape ball;
+  ball.body = 0;
+  ball.size = Vec3(0.5_r, 0, 0);
+  KEXPECT_EQ(dy::collide_shapes(cube, X[0], ball, X[0], 0.01_r, c, 16), 0);
+}

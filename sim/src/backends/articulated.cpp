@@ -737,6 +737,13 @@ class ArticulatedSimulator final : public Simulator {
               std::to_string(kMaxSelfShapes) + " with self-collisions on";
       return false;
     }
+    for (std::size_t i = 0; i < shapes_.size(); ++i)
+      if (shapes_[i].type == dy::ShapeType::convex) {
+        error = pre + "robot.self_collisions: collision meshes collide with the ground only (body " +
+                robot_.body_names[static_cast<std::size_t>(shapes_[i].body)] +
+                "); give the robot primitive geoms for self-collision, or turn it off";
+        return false;
+      }
     for (const dy::CollisionShape& sh : shapes_) bound_r_.push_back(dy::detail::bounding_radius(sh));
     for (std::size_t i = 0; i < shapes_.size(); ++i)
       for (std::size_t j = i + 1; j < shapes_.size(); ++j) {

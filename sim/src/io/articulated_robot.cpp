@@ -62,6 +62,45 @@ std::string joint_element(const mjModel* m, int j) {
   return n.empty() ? "joint #" + std::to_string(j) + " (in " + body_element(m, m->jnt_bodyid[j]) + ")" : "joint \"" + n + "\"";
 }
 
+// A collision mesh's points (RobotGeom::points): the vertices of its convex hull (MuJoCo's
+// compiler computes it, qhull, into mesh_graph: numvert, numface, then vert_edgeadr[numvert] and
+// vert_globalid[numvert]), all of them if the file's mesh has no hull; above
+// kMaxMeshCollisionPoints, the hull's extreme vertices along kMaxMeshCollisionPoints directions
+// spread over the sphere (a Fibonacci lattice), which keeps its outline against the ground. In the
+// geom's frame: MuJoCo stores mesh vertices in the frame geom_pos / geom_quat place.
+std::vector<Vec3> mesh_collision_points(const mjModel* m, int mesh) {
+  std::vector<Vec3> all;
+  const int adr = m->mesh_vertadr[mesh], nv = m->mesh_vertnum[mesh];
+  auto vertex = [&](int k) {
+    const float* v = m->mesh_vert + 3 * (adr + k);
+    return Vec3(static_cast<real>(v[0]), static_cast<real>(v[1]), static_cast<real>(v[2]));
+  };
+  const int gadr = m->mesh_graphadr[mesh];
+  if (gadr >= 0) {
+    const int* graph = m->mesh_graph + gadr;
+    const int hull_n = graph[0];
+    for (int k = 0; k < hull_n; ++k) all.push_back(vertex(graph[2 + hull_n + k]));
+  } else {
+    for (int k = 0; k < nv; ++k) all.push_back(vertex(k));
+  }
+  if (static_cast<int>(all.size()) <= kMaxMeshCollisionPoints) return all;
+  std::vector<Vec3> picked;
+  std::vector<bool> taken(all.size(), false);
+  const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
+  for (int d = 0; d < kMaxMeshCollisionPoints; ++d) {
+    const double z = 1 - 2 * (d + 0.5) / kMaxMeshCollisionPoints, rho = std::sqrt(1 - z * z), phi = golden * d;
+    const Vec3 dir(static_cast<real>(rho * std::cos(phi)), static_cast<real>(rho * std::sin(phi)), static_cast<real>(z));
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < all.size(); ++k)
+      if (all[k].dot(dir) > all[best].dot(dir)) best = k;
+    if (!taken[best]) {
+      taken[best] = true;
+      picked.push_back(all[best]);
+    }
+  }
+  return picked;
+}
+
 std::string geom_element(const mjModel* m, int g) {
   const std::string n = name_of(m, mjOBJ_GEOM, g);
   return (n.empty() ? "geom #" + std::to_string(g) : "geom \"" + n + "\"") + " (in " + body_element(m, m->geom_bodyid[g]) + ")";
@@ -254,9 +293,7 @@ void convert(const mjModel* m, const std::string& path, ArticulatedRobot& r) {
       case mjGEOM_ELLIPSOID: geom.type = RobotGeomType::ellipsoid; break;
       case mjGEOM_CYLINDER: geom.type = RobotGeomType::cylinder; break;
       case mjGEOM_BOX: geom.type = RobotGeomType::box; break;
-      case mjGEOM_MESH:
-        bad(geom_element(m, g), "mesh collision is not supported (give the robot primitive collision geoms, or "
-                                "contype=\"0\" conaffinity=\"0\" to make the mesh visual only)");
+      case mjGEOM_MESH: geom.type = RobotGeomType::mesh; break;
       case mjGEOM_HFIELD: bad(geom_element(m, g), "height-field collision is not supported on a robot");
       default: bad(geom_element(m, g), "geom type " + std::to_string(m->geom_type[g]) + " is not supported");
     }
@@ -278,6 +315,7 @@ void convert(const mjModel* m, const std::string& path, ArticulatedRobot& r) {
     geom.friction = static_cast<real>(m->geom_friction[3 * g]);
     geom.contype = m->geom_contype[g];
     geom.conaffinity = m->geom_conaffinity[g];
+    if (geom.type == RobotGeomType::mesh) geom.points = mesh_collision_points(m, m->geom_dataid[g]);
     r.geoms.push_back(geom);
   }
 
@@ -378,6 +416,11 @@ bool to_collision_shape(const RobotGeom& g, dynamics::CollisionShape& s) {
       s.type = dynamics::ShapeType::box;
       s.size = g.size;
       return true;
+    case RobotGeomType::mesh:
+      s.type = dynamics::ShapeType::convex;
+      s.points = g.points.data();
+      s.num_points = static_cast<int>(g.points.size());
+      return s.num_points > 0;
     case RobotGeomType::plane:
       return false;
   }

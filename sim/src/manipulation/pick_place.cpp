@@ -114,6 +114,10 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
       error = fpre + "geom \"" + g.name + "\": a plane on a moving body is not supported";
       return false;
     }
+    if (s.type == dy::ShapeType::convex) {
+      error = fpre + "geom \"" + g.name + "\": a collision mesh (meshes collide with the ground only; the arm needs primitives)";
+      return false;
+    }
     if (g.name == "fixed_jaw_pad") pad_body_[0] = g.body;
     if (g.name == "moving_jaw_pad") pad_body_[1] = g.body;
     im.arm_shapes.push_back(s);

@@ -162,6 +162,8 @@ Status render_camera(const PickPlaceWorld& world, const CameraSpec& cam, std::ui
         kind = kCapsule;
         rr = size[0] + size[1];
         break;
+      case dy::ShapeType::convex:
+        return;  // the SO-101 model and its scene are primitives (pick_place.cpp refuses meshes)
     }
     const Vec3 c = R_cw * (p_w - eye);  // centre in the camera frame
     Prim& p = prim[n];

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 
 using namespace kestrel;
@@ -346,10 +347,6 @@ TEST(SimArticulatedRobot, ErrorsNameTheFileAndTheProblem) {
       {"massless.xml",
        "<mujoco><worldbody><body name=\"a\">" + body + "<joint name=\"j\"/><body name=\"tip\"/></body></worldbody></mujoco>",
        "body \"tip\": mass 0"},
-      {"mesh.xml",
-       "<mujoco><asset><mesh name=\"tet\" vertex=\"0 0 0 0.1 0 0 0 0.1 0 0 0 0.1\"/></asset><worldbody><body name=\"a\">" +
-           body + "<joint name=\"j\"/><geom name=\"hull\" type=\"mesh\" mesh=\"tet\"/></body></worldbody></mujoco>",
-       "geom \"hull\" (in body \"a\"): mesh collision is not supported"},
       {"asymmetric.xml",
        "<mujoco><worldbody><body name=\"a\">" + body +
            "<joint name=\"j\"/></body></worldbody><actuator><motor name=\"m\" joint=\"j\" ctrllimited=\"true\" ctrlrange=\"-1 2\"/></actuator></mujoco>",
@@ -371,6 +368,42 @@ TEST(SimArticulatedRobot, ErrorsNameTheFileAndTheProblem) {
   std::string err;
   EXPECT_FALSE(load_robot_model(kModels + "/no_such_robot.xml", r, err));
   EXPECT_EQ(err, kModels + "/no_such_robot.xml: cannot open file");
+}
+
+// A collision mesh comes in as its hull's vertices in the geom's frame (dynamics ShapeType::convex):
+// a tetrahedron keeps its 4 corners (MuJoCo recentres a mesh on its centroid and moves the geom
+// there), a 200-vertex sphere mesh is cut to kMaxMeshCollisionPoints extreme points on its surface.
+TEST(SimArticulatedRobot, CollisionMeshesBecomeTheirHullPoints) {
+  const std::string body = "<inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.1 0.1 0.1\"/>";
+  std::string sphere;
+  for (int k = 0; k < 200; ++k) {  // points on a 0.05 m sphere (a Fibonacci lattice)
+    const double z = 1 - 2 * (k + 0.5) / 200, r = std::sqrt(1 - z * z), phi = 2.399963229728653 * k;
+    sphere += std::to_string(0.05 * r * std::cos(phi)) + " " + std::to_string(0.05 * r * std::sin(phi)) + " " + std::to_string(0.05 * z) + " ";
+  }
+  const std::string path = write_temp(
+      "meshes.xml", "<mujoco><asset><mesh name=\"tet\" vertex=\"0 0 0 0.1 0 0 0 0.1 0 0 0 0.1\"/><mesh name=\"ball\" vertex=\"" +
+                        sphere + "\"/></asset><worldbody><body name=\"a\">" + body +
+                        "<joint name=\"j\"/><geom name=\"hull\" type=\"mesh\" mesh=\"tet\"/>"
+                        "<geom name=\"ball\" type=\"mesh\" mesh=\"ball\" pos=\"0 0 -0.3\"/></body></worldbody></mujoco>");
+  const ArticulatedRobot r = load(path);
+  ASSERT_EQ(r.geoms.size(), 2u);
+  const RobotGeom& tet = r.geoms[0];
+  EXPECT_EQ(tet.type, RobotGeomType::mesh);
+  ASSERT_EQ(tet.points.size(), 4u);
+  // The corners back in the body frame: pos + R p gives {0, 0.1 x, 0.1 y, 0.1 z} in some order.
+  const Mat3 R = rotation_matrix(quat_from_xyzw(tet.quat_xyzw_b));
+  int matched = 0;
+  for (const Vec3& corner : {Vec3(0, 0, 0), Vec3(0.1_r, 0, 0), Vec3(0, 0.1_r, 0), Vec3(0, 0, 0.1_r)})
+    for (const Vec3& p : tet.points) matched += ((tet.pos_b + R * p) - corner).norm() < 1e-5 ? 1 : 0;
+  EXPECT_EQ(matched, 4);
+  dynamics::CollisionShape cs;
+  ASSERT_TRUE(to_collision_shape(tet, cs));
+  EXPECT_EQ(cs.type, dynamics::ShapeType::convex);
+  EXPECT_EQ(cs.points, tet.points.data());
+  EXPECT_EQ(cs.num_points, 4);
+  const RobotGeom& ball = r.geoms[1];
+  EXPECT_EQ(static_cast<int>(ball.points.size()), kMaxMeshCollisionPoints);
+  for (const Vec3& p : ball.points) EXPECT_NEAR(p.norm(), 0.05, 2e-3);  // on the surface (hull vertices)
 }
 
 TEST(SimArticulatedRobot, JointOffsetMovesTheBodyFrameToTheJoint) {

@@ -496,11 +496,19 @@ template <int N, int C, int W = 1>
 // ----------------------------------------------------------------------------------------------
 // Collision geometry against a half-space (the ground, a slope).
 
-enum class ShapeType : std::uint8_t { sphere = 0, capsule = 1, box = 2 };
+enum class ShapeType : std::uint8_t { sphere = 0, capsule = 1, box = 2, convex = 3 };
+
+/// Contacts a convex shape gives with a half-space at most (its deepest vertices): the keys' room
+/// per shape, as a box's eight corners.
+constexpr int kMaxConvexContacts = 8;
 
 /// A collision primitive fixed on a body: its centre p_b and orientation R_b (shape -> body) in
 /// the body's frame; size: sphere [radius, -, -]; capsule [radius, half-length of the segment
-/// along the shape's z, -]; box [half extents]. Its friction coefficient and restitution.
+/// along the shape's z, -]; box [half extents]; convex: the vertices of a convex mesh (a robot's
+/// collision mesh, reduced to its hull's extreme points) in the shape's frame, `points` (caller
+/// storage, num_points of them; size unused). Its friction coefficient and restitution. Convex
+/// shapes collide with half-spaces (collide_halfspace), not with other shapes (collide_shapes
+/// gives them no contact).
 struct CollisionShape {
   int body = -1;
   ShapeType type = ShapeType::sphere;
@@ -509,6 +517,8 @@ struct CollisionShape {
   Vec3 size = Vec3::Zero();
   real friction = 1;
   real restitution = 0;
+  const Vec3* points = nullptr;  // convex only
+  int num_points = 0;
 };
 
 /// The ground as the half-space n . x <= offset_m (n unit, world coordinates, pointing out of the
@@ -522,7 +532,8 @@ struct HalfSpace {
 
 /// The contacts of the shapes with the half-space whose gap is below margin_m (a positive margin
 /// lets step_constrained catch a fast body at the step it arrives): a sphere's deepest point, a
-/// capsule's two end spheres, a box's corners. The pair's friction and restitution are the means
+/// capsule's two end spheres, a box's corners, a convex shape's vertices (its kMaxConvexContacts
+/// deepest, in vertex order, so a vertex keeps its key while the set stays the same). The pair's friction and restitution are the means
 /// of the two (PhysX's default combine mode, which legged_gym's friction ranges assume). Writes at
 /// most `capacity` contacts and returns how many were found (more than capacity: the caller's
 /// capacity is too small; the first `capacity` are written).
@@ -570,6 +581,35 @@ inline int collide_halfspace(const CollisionShape* shapes, int num_shapes, const
           add(s.body, corner, g.normal_w.dot(corner) - g.offset_m, s);
         }
         break;
+      case ShapeType::convex: {
+        // The kMaxConvexContacts deepest vertices below the margin: a threshold gap raised until
+        // few enough remain (selection without sorting storage), ties kept in vertex order.
+        int chosen[kMaxConvexContacts];
+        real chosen_gap[kMaxConvexContacts];
+        int n = 0;
+        for (int k = 0; k < s.num_points; ++k) {
+          const real gap = g.normal_w.dot(X.r + X.E.transpose() * (s.p_b + s.R_b * s.points[k])) - g.offset_m;
+          if (!(gap < margin_m)) continue;
+          if (n < kMaxConvexContacts) {
+            chosen[n] = k;
+            chosen_gap[n++] = gap;
+            continue;
+          }
+          int worst = 0;  // the shallowest chosen vertex, replaced by a deeper one
+          for (int j = 1; j < n; ++j)
+            if (chosen_gap[j] > chosen_gap[worst]) worst = j;
+          if (gap < chosen_gap[worst]) {
+            for (int j = worst; j + 1 < n; ++j) chosen[j] = chosen[j + 1], chosen_gap[j] = chosen_gap[j + 1];
+            chosen[n - 1] = k;
+            chosen_gap[n - 1] = gap;
+          }
+        }
+        for (int j = 0; j < n; ++j) {
+          const Vec3 v_w = c_w + R_w * s.points[chosen[j]];
+          add(s.body, v_w, chosen_gap[j], s);
+        }
+        break;
+      }
     }
   }
   return found;
@@ -661,6 +701,11 @@ inline real bounding_radius(const CollisionShape& s) {
     case ShapeType::sphere: return s.size[0];
     case ShapeType::capsule: return s.size[0] + s.size[1];
     case ShapeType::box: return s.size.norm();
+    case ShapeType::convex: {
+      real r = 0;
+      for (int k = 0; k < s.num_points; ++k) r = std::max(r, s.points[k].norm());
+      return r;
+    }
   }
   return 0;
 }
@@ -813,6 +858,7 @@ inline int collide_shapes(const CollisionShape& a, const Transform& X_a, const C
       add(k, poly[k] - real(0.5) * gap * nr, n, gap);
     }
   };
+  if (a.type == ShapeType::convex || b.type == ShapeType::convex) return 0;  // half-spaces only (see CollisionShape)
   const bool round_a = a.type != ShapeType::box, round_b = b.type != ShapeType::box;
   if (round_a && round_b) {
     Vec3 a0, a1, b0, b1;

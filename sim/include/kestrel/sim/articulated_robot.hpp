@@ -54,7 +54,12 @@ namespace kestrel::sim {
 inline constexpr int kMaxRobotBodies = 32;
 using RobotMultibody = dynamics::MultibodyModel<kMaxRobotBodies>;
 
-enum class RobotGeomType : std::uint8_t { plane = 0, sphere = 1, capsule = 2, ellipsoid = 3, cylinder = 4, box = 5 };
+enum class RobotGeomType : std::uint8_t { plane = 0, sphere = 1, capsule = 2, ellipsoid = 3, cylinder = 4, box = 5, mesh = 6 };
+
+/// A collision mesh keeps at most this many vertices: its convex hull's (MuJoCo's compiler builds
+/// the hull), reduced further to the hull's extreme points along a fixed set of directions when
+/// there are more. The robot collides with the ground through them (dynamics::ShapeType::convex).
+constexpr int kMaxMeshCollisionPoints = 64;
 
 /// A collision primitive fixed on a body (or the world: body -1).
 struct RobotGeom {
@@ -66,6 +71,7 @@ struct RobotGeom {
   Vec4 quat_xyzw_b = Vec4(0, 0, 0, 1);
   real friction = 1;  // sliding friction coefficient
   int contype = 1, conaffinity = 1;  // MuJoCo's collision bits (a URDF's collision geoms: 1, 1)
+  std::vector<Vec3> points;  // mesh: its collision vertices in the geom's frame (m)
 };
 
 struct ArticulatedRobot {
@@ -95,8 +101,9 @@ int find_body(const ArticulatedRobot& robot, const std::string& name);
 
 /// A geom of the file as the core's collision primitive (dynamics/contact.hpp) on its body: a
 /// sphere, capsule or box as itself; a cylinder as the capsule of its radius and half-length (its
-/// end discs' rims become end spheres); an ellipsoid as its bounding box. False for a plane (no
-/// primitive of the core's is a plane on a body).
+/// end discs' rims become end spheres); an ellipsoid as its bounding box; a mesh as a convex shape
+/// over g.points (which `out` points into: g must outlive it). False for a plane (no primitive of
+/// the core's is a plane on a body).
 bool to_collision_shape(const RobotGeom& g, dynamics::CollisionShape& out);
 
 }  // namespace kestrel::sim
