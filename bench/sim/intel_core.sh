@@ -23,16 +23,7 @@ variants=${VARIANTS:-before after}
 core=${CORE:-2}
 mkdir -p "$out"
 ld="$c/lib/ld-linux-x86-64.so.2 --library-path $c/lib"
-{
-  date -u '+%Y-%m-%d %H:%M:%S UTC'
-  uname -a
-  echo "nproc $(nproc)"
-  lscpu 2>/dev/null
-  grep -m1 'model name' /proc/cpuinfo
-  grep -m1 '^flags' /proc/cpuinfo
-  grep MHz /proc/cpuinfo | sort | uniq -c | head -5
-  cat /sys/devices/system/cpu/cpu0/cpufreq/scaling_governor 2>/dev/null
-} > "$out/machine.txt" 2>&1
+sh "$(dirname "$0")/machine_info.sh" > "$out/machine.txt" 2>&1
 taskset -c "$core" $ld "$c/kestrel_cpu_probe" > "$out/probe.txt" 2>&1
 echo "--- the same probe, a second run" >> "$out/probe.txt"
 taskset -c "$core" $ld "$c/kestrel_cpu_probe" >> "$out/probe.txt" 2>&1

@@ -17,12 +17,7 @@ threads=${4:-"1 2 4 8 16"}
 copies=${COPIES:-baseline avx2 avx512}
 mkdir -p "$out"
 ld="$c/lib/ld-linux-x86-64.so.2 --library-path $c/lib"
-{
-  date -u '+%Y-%m-%d %H:%M:%S UTC'
-  uname -a
-  echo "nproc $(nproc)"
-  lscpu 2>/dev/null
-} > "$out/machine.txt" 2>&1
+sh "$(dirname "$0")/machine_info.sh" > "$out/machine.txt" 2>&1
 scen="$out/empty.yaml"
 printf 'env: {name: empty, num_envs: 4096}\n' > "$scen"
 echo "copy,rep,envs,threads,steps,wall_s,env_steps_per_s,state_hash,robot_step" > "$out/runs.csv"

@@ -181,17 +181,8 @@ inline bool packet_may_hit(const BvhNode& node, const real o[3], const PacketBou
 
 // ray_box for ray i of the packet (the same slab arithmetic).
 inline bool packet_ray_box(const BvhNode& node, const MeshRayPacket& p, std::uint32_t i, real tmin, real& tn_out) {
-  real tn = tmin, tf = p.tmax[i];
-  for (int k = 0; k < 3; ++k) {
-    const real t0 = (node.lo[k] - p.o[k]) * p.inv_d[k][i];
-    const real t1 = (node.hi[k] - p.o[k]) * p.inv_d[k][i];
-    const real a = t0 < t1 ? t0 : t1;
-    const real b = t0 < t1 ? t1 : t0;
-    tn = a > tn ? a : tn;
-    tf = b < tf ? b : tf;
-  }
-  tn_out = tn;
-  return tn <= tf;
+  const real inv_d[3] = {p.inv_d[0][i], p.inv_d[1][i], p.inv_d[2][i]};
+  return slab_box(p.o, inv_d, node.lo, node.hi, tmin, p.tmax[i], tn_out);
 }
 
 // First ray >= from that hits the node's box (p.count: none); its entry distance in tn.

@@ -32,6 +32,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
+#include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/simulator.hpp"
 #include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/terrain.hpp"
@@ -418,6 +419,23 @@ class ArticulatedSimulator final : public Simulator {
       if ((centre_w[ia] - centre_w[ib]).norm() > bound_r_[ia] + bound_r_[ib] + kContactMargin_m) continue;
       const dy::CollisionShape& sa = shapes_[ia];
       const dy::CollisionShape& sb = shapes_[ib];
+      if (sa.type == dy::ShapeType::convex || sb.type == dy::ShapeType::convex) {
+        // A collision mesh (its hull) against another shape: libccd's MPR through the rigid
+        // world's narrow phase (sim/collision.hpp), one contact at the deepest point, none while
+        // apart (MPR measures penetration only: no speculative margin here).
+        const Contact kc = collide(sim_shape(sa, w.scratch.X_world[sa.body]), sim_shape(sb, w.scratch.X_world[sb.body]));
+        if (!kc.hit) continue;
+        dy::ContactPoint& c = w.contacts[found++];
+        c.body = sa.body;
+        c.body_b = sb.body;
+        c.point_w = kc.point_w;
+        c.normal_w = kc.normal_w;  // from b into a: pushes a along it, b against it
+        c.separation_m = -kc.depth_m;
+        c.friction = real(0.5) * (sa.friction + sb.friction);
+        c.restitution = real(0.5) * (sa.restitution + sb.restitution);
+        c.key = self_key0 + 16 * static_cast<int>(p);
+        continue;
+      }
       const int room = kMaxContacts - found;
       const int k = dy::collide_shapes(sa, w.scratch.X_world[sa.body], sb, w.scratch.X_world[sb.body], kContactMargin_m,
                                        w.contacts + found, room, self_key0 + 16 * static_cast<int>(p));
@@ -550,6 +568,35 @@ class ArticulatedSimulator final : public Simulator {
       for (int s = 0; s < self->decimation_; ++s) self->physics_step(e, w);
       self->refresh(e, w);
     }
+  }
+
+  /// A shape posed by its body's transform, as the rigid world's narrow phase takes it.
+  static Shape sim_shape(const dy::CollisionShape& s, const dy::Transform& X) {
+    Shape out;
+    const Mat3 R_w = X.E.transpose() * s.R_b;
+    out.position_w = X.r + X.E.transpose() * s.p_b;
+    out.orientation_wb = quat_from_rotation_matrix(R_w);
+    switch (s.type) {
+      case dy::ShapeType::sphere:
+        out.type = ShapeType::sphere;
+        out.radius_m = s.size[0];
+        break;
+      case dy::ShapeType::capsule:
+        out.type = ShapeType::capsule;
+        out.radius_m = s.size[0];
+        out.half_length_m = s.size[1];
+        break;
+      case dy::ShapeType::box:
+        out.type = ShapeType::box;
+        out.half_extents_m = s.size;
+        break;
+      case dy::ShapeType::convex:
+        out.type = ShapeType::convex_hull;
+        out.vertices = s.points;
+        out.num_vertices = s.num_points;
+        break;
+    }
+    return out;
   }
 
   /// Height and unit normal of the terrain at (x, y): its local plane as a half-space.
@@ -737,13 +784,6 @@ class ArticulatedSimulator final : public Simulator {
               std::to_string(kMaxSelfShapes) + " with self-collisions on";
       return false;
     }
-    for (std::size_t i = 0; i < shapes_.size(); ++i)
-      if (shapes_[i].type == dy::ShapeType::convex) {
-        error = pre + "robot.self_collisions: collision meshes collide with the ground only (body " +
-                robot_.body_names[static_cast<std::size_t>(shapes_[i].body)] +
-                "); give the robot primitive geoms for self-collision, or turn it off";
-        return false;
-      }
     for (const dy::CollisionShape& sh : shapes_) bound_r_.push_back(dy::detail::bounding_radius(sh));
     for (std::size_t i = 0; i < shapes_.size(); ++i)
       for (std::size_t j = i + 1; j < shapes_.size(); ++j) {

@@ -76,11 +76,14 @@ inline Ray make_ray(const real o[3], const real d[3]) {
 /// Slab test. Returns the entry distance in tnear_out; true when [tmin, tmax] overlaps the box.
 /// The comparison is inclusive so that boxes touching the current best hit are still visited
 /// (needed for the stable-id tie break of equal-distance hits).
-inline bool ray_box(const Ray& r, const real lo[3], const real hi[3], real tmin, real tmax, real& tnear_out) {
+/// The slab test itself, on an origin and inverse direction given apart (a packet keeps its rays'
+/// inverse directions in columns: mesh.cpp's packet_ray_box).
+inline bool slab_box(const real o[3], const real inv_d[3], const real lo[3], const real hi[3], real tmin, real tmax,
+                     real& tnear_out) {
   real tn = tmin, tf = tmax;
   for (int k = 0; k < 3; ++k) {
-    const real t0 = (lo[k] - r.o[k]) * r.inv_d[k];
-    const real t1 = (hi[k] - r.o[k]) * r.inv_d[k];
+    const real t0 = (lo[k] - o[k]) * inv_d[k];
+    const real t1 = (hi[k] - o[k]) * inv_d[k];
     const real a = t0 < t1 ? t0 : t1;
     const real b = t0 < t1 ? t1 : t0;
     tn = a > tn ? a : tn;
@@ -88,6 +91,9 @@ inline bool ray_box(const Ray& r, const real lo[3], const real hi[3], real tmin,
   }
   tnear_out = tn;
   return tn <= tf;
+}
+inline bool ray_box(const Ray& r, const real lo[3], const real hi[3], real tmin, real tmax, real& tnear_out) {
+  return slab_box(r.o, r.inv_d, lo, hi, tmin, tmax, tnear_out);
 }
 
 /// Local-frame hit of one shape: distance and outward surface normal (unit, local frame).
