@@ -363,6 +363,7 @@ TEST(LocomotionTask, NoHeapInsideStep) {
       kestrel::test::tiled_terrain(c.env.terrain, 3, 2, 2, 1);
       kestrel::test::randomise_all_articulated(c);
       c.task.locomotion.push_links_interval_s = 0.04_r;
+      c.robot.self_collisions = true;  // and the self-collision pairs
     }
     auto t = build(c);
     std::vector<float> a(4 * 12, 0.3f);
