@@ -54,8 +54,8 @@ constexpr std::size_t kMaxDelay = 4;       // physics steps of action delay the 
 using Drive = JointPdParams<kMaxJoints, kMaxDelay>;
 using DriveState = JointPdState<kMaxJoints, kMaxDelay>;
 constexpr real kBaseContactThreshold_N = 1;
-constexpr int kWarmRows = 96;
-constexpr int kMaxSelfShapes = 64;  // collision geoms of a robot with self-collisions on  // rows of the previous step kept per robot (contact.hpp's WarmStart)
+constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
+constexpr int kMaxSelfShapes = 64;  // collision geoms of a robot with self-collisions on
 
 struct Worker {
   // The robot's model with one environment's randomised root-body inertia and joint armatures
@@ -573,8 +573,8 @@ class ArticulatedSimulator final : public Simulator {
   /// A shape posed by its body's transform, as the rigid world's narrow phase takes it.
   static Shape sim_shape(const dy::CollisionShape& s, const dy::Transform& X) {
     Shape out;
-    const Mat3 R_w = X.E.transpose() * s.R_b;
-    out.position_w = X.r + X.E.transpose() * s.p_b;
+    Mat3 R_w;
+    dy::shape_pose(s, X, out.position_w, R_w);
     out.orientation_wb = quat_from_rotation_matrix(R_w);
     switch (s.type) {
       case dy::ShapeType::sphere:
@@ -784,7 +784,7 @@ class ArticulatedSimulator final : public Simulator {
               std::to_string(kMaxSelfShapes) + " with self-collisions on";
       return false;
     }
-    for (const dy::CollisionShape& sh : shapes_) bound_r_.push_back(dy::detail::bounding_radius(sh));
+    for (const dy::CollisionShape& sh : shapes_) bound_r_.push_back(dy::bounding_radius(sh));
     for (std::size_t i = 0; i < shapes_.size(); ++i)
       for (std::size_t j = i + 1; j < shapes_.size(); ++j) {
         const int a = shapes_[i].body, b = shapes_[j].body;

@@ -42,6 +42,13 @@ std::unique_ptr<Task> build(const WorldConfig& c) {
 
 PickPlaceWorld& world(Task& t, int env) { return const_cast<PickPlaceWorld&>(*pick_place_world(t, env)); }
 
+// Environment env's cube resting on its box's floor (5 mm thick), the cube's centre 12.5 mm above.
+void put_cube_in_box(Task& t, int env) {
+  PickPlaceWorld& w = world(t, env);
+  const Vec3 b = w.state().box_pos_w;
+  w.set_cube_pose(Vec3(b[0], b[1], 0.005 + 0.0125), Vec4(0, 0, 0, 1));
+}
+
 std::vector<float> home_actions(Task& t) {
   std::vector<float> a(static_cast<std::size_t>(t.num_envs()) * 6);
   for (int e = 0; e < t.num_envs(); ++e)
@@ -146,9 +153,7 @@ TEST(PickPlaceTask, SuccessTerminatesTruncationAtLength) {
   ASSERT_TRUE(t);
   // Env 0: the cube put into the box (resting on its floor), the arm at home: after
   // success_hold_steps (10) steps it succeeds; env 1 runs to the time limit.
-  PickPlaceWorld& w = world(*t, 0);
-  const Vec3 b = w.state().box_pos_w;
-  w.set_cube_pose(Vec3(b[0], b[1], 0.005 + 0.0125), Vec4(0, 0, 0, 1));
+  put_cube_in_box(*t, 0);
   std::vector<float> a = home_actions(*t);
   for (int s = 1; s <= 10; ++s) {
     t->step(a.data());
@@ -178,9 +183,7 @@ TEST(PickPlaceTask, SuccessOffLeavesTheEpisodeToTheCaller) {
   ASSERT_FALSE(c.task.pick_place.end_on_success);
   auto t = build(c);
   ASSERT_TRUE(t);
-  PickPlaceWorld& w = world(*t, 0);
-  const Vec3 b = w.state().box_pos_w;
-  w.set_cube_pose(Vec3(b[0], b[1], 0.005 + 0.0125), Vec4(0, 0, 0, 1));
+  put_cube_in_box(*t, 0);
   std::vector<float> a = home_actions(*t);
   for (int s = 1; s <= 20; ++s) {
     t->step(a.data());

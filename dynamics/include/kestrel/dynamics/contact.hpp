@@ -680,13 +680,6 @@ inline void segment_closest(const Vec3& p0, const Vec3& p1, const Vec3& q0, cons
   }
 }
 
-/// A shape's centre and orientation (shape -> world) in the world; X_body is its body's pose
-/// (Plücker world -> body, as forward_kinematics gives) or the identity for a world shape.
-inline void shape_pose(const CollisionShape& s, const Transform& X_body, Vec3& c_w, Mat3& R_w) {
-  R_w = X_body.E.transpose() * s.R_b;
-  c_w = X_body.r + X_body.E.transpose() * s.p_b;
-}
-
 /// A sphere's or capsule's core segment in the world (a sphere's is a point) and its radius.
 inline real shape_segment(const CollisionShape& s, const Vec3& c_w, const Mat3& R_w, Vec3& e0, Vec3& e1) {
   const Vec3 half = s.type == ShapeType::capsule ? Vec3(R_w.col(2) * s.size[1]) : Vec3::Zero();
@@ -695,7 +688,16 @@ inline real shape_segment(const CollisionShape& s, const Vec3& c_w, const Mat3& 
   return s.size[0];
 }
 
-/// A radius that bounds the shape about its centre (the broad-phase test of collide_shapes).
+}  // namespace detail
+
+/// A shape's centre and orientation (shape -> world) in the world; X_body is its body's pose
+/// (Plücker world -> body, as forward_kinematics gives) or the identity for a world shape.
+inline void shape_pose(const CollisionShape& s, const Transform& X_body, Vec3& c_w, Mat3& R_w) {
+  R_w = X_body.E.transpose() * s.R_b;
+  c_w = X_body.r + X_body.E.transpose() * s.p_b;
+}
+
+/// A radius that bounds the shape about its centre (collide_shapes' broad phase, or a caller's own over many pairs).
 inline real bounding_radius(const CollisionShape& s) {
   switch (s.type) {
     case ShapeType::sphere: return s.size[0];
@@ -709,8 +711,6 @@ inline real bounding_radius(const CollisionShape& s) {
   }
   return 0;
 }
-
-}  // namespace detail
 
 /// The contacts between shape a, on body a.body (>= 0), and shape b, on body b.body or on the world
 /// (b.body = -1, X_b the identity: its p_b and R_b are then world coordinates), whose gap is below
@@ -728,11 +728,12 @@ inline real bounding_radius(const CollisionShape& s) {
 /// at most `capacity` contacts and returns how many were found (more than capacity: too small).
 inline int collide_shapes(const CollisionShape& a, const Transform& X_a, const CollisionShape& b, const Transform& X_b,
                           real margin_m, ContactPoint* out, int capacity, std::int32_t key_base = 0) {
+  if (a.type == ShapeType::convex || b.type == ShapeType::convex) return 0;  // half-spaces only (see CollisionShape)
   Vec3 ca, cb;
   Mat3 Ra, Rb;
-  detail::shape_pose(a, X_a, ca, Ra);
-  detail::shape_pose(b, X_b, cb, Rb);
-  if ((ca - cb).norm() > detail::bounding_radius(a) + detail::bounding_radius(b) + margin_m) return 0;
+  shape_pose(a, X_a, ca, Ra);
+  shape_pose(b, X_b, cb, Rb);
+  if ((ca - cb).norm() > bounding_radius(a) + bounding_radius(b) + margin_m) return 0;
   int found = 0;
   auto add = [&](int index, const Vec3& point_w, const Vec3& normal_w, real gap) {
     if (!(gap < margin_m)) return;
@@ -858,7 +859,6 @@ inline int collide_shapes(const CollisionShape& a, const Transform& X_a, const C
       add(k, poly[k] - real(0.5) * gap * nr, n, gap);
     }
   };
-  if (a.type == ShapeType::convex || b.type == ShapeType::convex) return 0;  // half-spaces only (see CollisionShape)
   const bool round_a = a.type != ShapeType::box, round_b = b.type != ShapeType::box;
   if (round_a && round_b) {
     Vec3 a0, a1, b0, b1;
