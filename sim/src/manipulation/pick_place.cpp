@@ -161,7 +161,6 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
   }
   im.params = dy::ConstraintParams();
   im.params.iterations = cfg.solver_iterations;
-  im.params.residual_lanes = 4;
   cfg_ = cfg;
   robot_ = std::move(robot);
   rng_ = RngStream(seed, env_index, kPurposeObjectPose);

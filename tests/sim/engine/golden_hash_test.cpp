@@ -63,7 +63,10 @@ TEST(SimGoldenHash, DynamicEnvWithCollisionsMatchesTheFrozenHash) {
 // randomisation of simulator.* on, random joint targets at the torque limits, pushes of the base
 // and of every link, base-contact and timeout resets, 200 env-steps of 4 physics steps, 1 thread.
 namespace {
-constexpr std::uint64_t kGoldenLeggedHash = 0x93b6ea6de3a1575bull;
+// Re-frozen when projected Gauss-Seidel began keeping every row's residual in one vector (summed
+// afresh per sweep, updated as impulses change) instead of summing W_r . lambda serially per row:
+// same solver, other rounding.
+constexpr std::uint64_t kGoldenLeggedHash = 0x07220a284e60532full;
 }  // namespace
 
 TEST(SimGoldenHash, LeggedRunWithContactsPushesAndResetsMatchesTheFrozenHash) {

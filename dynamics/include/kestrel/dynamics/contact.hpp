@@ -83,10 +83,6 @@ struct ConstraintParams {
   real restitution_threshold_mps = real(0.5);  // slower impacts do not bounce
   real limit_margin = real(0.02);           // rad or m: a joint this close to a limit gets its row
   real regularization = real(1e-6);         // relative constraint force mixing on W's diagonal
-  // PGS's residual sums W_r . lambda serially (1) or in four partial sums (4): both deterministic,
-  // different bits; 4 is faster where rows are many (an arm holding a cube), 1 keeps the legged
-  // robots' frozen results.
-  int residual_lanes = 1;
 };
 
 enum class RowKind : std::uint8_t { normal = 0, tangent = 1, limit = 2, joint_friction = 3 };
@@ -103,7 +99,7 @@ struct ConstraintData {
   int dof_parent[kDofs];  // the velocity coordinate each one hangs from (-1: none)
   Transform X_world[kMaxBodies];
   real J[kRows][kDofs];  // constraint rows
-  real Z[kRows][kDofs];  // L^-T J_i^T: half of the solve, W = Z^T D^-1 Z
+  real ZT[kDofs][kRows];  // column i: L^-T J_i^T, half of the solve (W = Z^T D^-1 Z), stored by coordinate
   std::int32_t key[kRows];   // the row's name between steps (WarmStart; -1: none)
   std::int16_t leaf[kRows];  // the deepest velocity coordinate row i involves (its chain up from there; -1: none)
   std::int16_t leaf_b[kRows];  // a two-body contact's second chain (-1: none); row i involves the union
@@ -240,7 +236,7 @@ template <int N, int C, int W = 1>
   for (int i = 0; i < m.num_bodies; ++i)
     if (m.dof_index[i] >= 0 && m.joint[i] != JointType::free) cd.H[m.dof_index[i]][m.dof_index[i]] += dt_s * m.damping[i];
   real zero[kDofs] = {}, acc[kDofs];
-  rnea(m, d, q, qd, zero, acc);
+  detail::rnea_passes(m, d, qd, zero, acc, static_cast<const Vec6*>(nullptr));  // crba left the kinematics at q
   for (int k = 0; k < n; ++k) acc[k] = tau[k] - acc[k];
   if (drive_kp != nullptr || drive_kd != nullptr) {
     // The drives' torques in tau, kp (q* - q) - kd qd, taken at the end of the step:
@@ -260,7 +256,7 @@ template <int N, int C, int W = 1>
   if (!all_finite(v_free, n)) return Status::non_finite_input;
 
   // The rows.
-  forward_kinematics(m, d, q, cd.X_world);
+  detail::world_poses(m, d, cd.X_world);  // still at q
   int rows = 0;
   auto new_row = [&](RowKind kind, int owner) -> int {
     const int r = rows++;
@@ -344,50 +340,62 @@ template <int N, int C, int W = 1>
   // passed up.
   int chain[kDofs];
   for (int r = 0; r < rows; ++r) {
-    real* z = cd.Z[r];
+    real z[kDofs];  // solved here, then stored by coordinate
     for (int k = 0; k < n; ++k) z[k] = 0;
     const int len = detail::row_chain(cd, r, chain);
     for (int k = 0; k < len; ++k) z[chain[k]] = cd.J[r][chain[k]];
-    for (int k = 0; k < len; ++k) {
-      const int i = chain[k];
-      for (int j = cd.dof_parent[i]; j >= 0; j = cd.dof_parent[j]) z[j] -= cd.H[i][j] * z[i];
+    if (cd.leaf_b[r] < 0) {
+      // One chain: the coordinates after chain[k] are exactly its ancestors, in the order the
+      // parent links give them, read from the array instead of walked link by link (a chain of
+      // dependent loads per coordinate).
+      for (int k = 0; k < len; ++k) {
+        const real zi = z[chain[k]];
+        const real* Hi = cd.H[chain[k]];
+        for (int a = k + 1; a < len; ++a) z[chain[a]] -= Hi[chain[a]] * zi;
+      }
+    } else {
+      for (int k = 0; k < len; ++k) {
+        const int i = chain[k];
+        for (int j = cd.dof_parent[i]; j >= 0; j = cd.dof_parent[j]) z[j] -= cd.H[i][j] * z[i];
+      }
     }
+    for (int k = 0; k < n; ++k) cd.ZT[k][r] = z[k];
     real bv = 0;
     for (int k = 0; k < len; ++k) bv += cd.J[r][chain[k]] * v_free[chain[k]];
     cd.b[r] = bv;
   }
   for (int r = 0; r < rows; ++r) {
-    // Row r's chain once, with Z_r / D (one division per coordinate, not per pair of rows).
+    // Row r of W's lower triangle, sum_k (Z_rk / D_k) Z_ck over row r's chain: one contiguous
+    // multiply-add over the rows c <= r per coordinate (Z is stored by coordinate for it, and
+    // vectorises), in the chain's order; one division per coordinate, not per pair of rows.
     const int len = detail::row_chain(cd, r, chain);
-    real zd[kDofs];
-    for (int k = 0; k < len; ++k) zd[k] = cd.Z[r][chain[k]] / cd.H[chain[k]][chain[k]];
-    for (int c = 0; c <= r; ++c) {
-      real w = 0;
-      for (int k = 0; k < len; ++k) w += zd[k] * cd.Z[c][chain[k]];
-      cd.W[r][c] = cd.W[c][r] = w;
+    real* w = cd.W[r];
+    for (int c = 0; c <= r; ++c) w[c] = 0;
+    for (int k = 0; k < len; ++k) {
+      const int i = chain[k];
+      const real zd = cd.ZT[i][r] / cd.H[i][i];
+      const real* zc = cd.ZT[i];
+      for (int c = 0; c <= r; ++c) w[c] += zd * zc[c];
     }
+    for (int c = 0; c < r; ++c) cd.W[c][r] = w[c];
   }
 
-  // Projected Gauss-Seidel.
-  auto residual = [&](int r) {
-    real v = cd.b[r] - cd.target[r];
-    if (p.residual_lanes != 4) {
-      for (int c = 0; c < rows; ++c) v += cd.W[r][c] * cd.lambda[c];
-      return v;
-    }
-    // Four partial sums, added pairwise at the end: a fixed order (the same bits on every target),
-    // but not the serial one, and four times shorter a chain of dependent additions.
-    real acc0 = 0, acc1 = 0, acc2 = 0, acc3 = 0;
-    int c = 0;
-    for (; c + 4 <= rows; c += 4) {
-      acc0 += cd.W[r][c] * cd.lambda[c];
-      acc1 += cd.W[r][c + 1] * cd.lambda[c + 1];
-      acc2 += cd.W[r][c + 2] * cd.lambda[c + 2];
-      acc3 += cd.W[r][c + 3] * cd.lambda[c + 3];
-    }
-    for (; c < rows; ++c) acc0 += cd.W[r][c] * cd.lambda[c];
-    return v + ((acc0 + acc1) + (acc2 + acc3));
+  // Projected Gauss-Seidel over residuals u = b - target + W lambda kept for all rows at once:
+  // summed afresh at the start of every sweep (column by column, u += W_c lambda_c, for every row
+  // together: no chain of dependent additions, and it vectorises; W is symmetric, mirrored above,
+  // so column c is row c), then updated as each impulse changes within the sweep (u += W_r delta).
+  // Summing W_r . lambda serially for every row instead is a chain of additions as long as the row
+  // count, a fifth of a standing Go2's step. The fresh sum makes a sweep that starts converged
+  // change nothing, so it stops (updated incrementally only, u's rounding kept a standing ANYmal's
+  // changes at ~1e-6 m/s, the tolerance, for all 60 sweeps). Fixed orders: the same bits on every
+  // target.
+  real u[CD::kRows];
+  auto apply = [&](int r, real delta) {
+    if (delta == 0) return;
+    const real* w = cd.W[r];
+    for (int c = 0; c < rows; ++c) u[c] += w[c] * delta;
   };
+  auto residual = [&](int r) { return u[r]; };
   if (warm != nullptr) {
     // Start from the previous step's impulses of the same rows (looked up by key; most rows keep
     // their index, which is tried first), clamped to this step's bounds.
@@ -417,6 +425,8 @@ template <int N, int C, int W = 1>
   int sweep = 0;
   for (; sweep < p.iterations && rows > 0; ++sweep) {
     real change = 0;
+    for (int c = 0; c < rows; ++c) u[c] = cd.b[c] - cd.target[c];
+    for (int c = 0; c < rows; ++c) apply(c, cd.lambda[c]);
     for (int r = 0; r < rows;) {
       const real diag = cd.W[r][r] * (1 + p.regularization);
       if (!(diag > 0)) {  // a row nothing can move (a contact on a welded base): no impulse
@@ -427,12 +437,15 @@ template <int N, int C, int W = 1>
         // The normal row, then the contact's two friction rows projected onto the cone.
         const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
         change = std::max(change, std::fabs(ln - cd.lambda[r]) * diag);
+        apply(r, ln - cd.lambda[r]);
         cd.lambda[r] = ln;
+        // Gauss-Seidel within the pair: the second friction row sees the first's new impulse
+        // (through W's one entry between them; u takes both once they are projected).
         real lt[2];
         for (int a = 1; a <= 2; ++a) {
           const real da = cd.W[r + a][r + a] * (1 + p.regularization);
-          lt[a - 1] = da > 0 ? cd.lambda[r + a] - residual(r + a) / da : real(0);
-          cd.lambda[r + a] = lt[a - 1];  // Gauss-Seidel within the pair, projected below
+          const real res = a == 1 ? residual(r + 1) : residual(r + 2) + cd.W[r + 2][r + 1] * (lt[0] - cd.lambda[r + 1]);
+          lt[a - 1] = da > 0 ? cd.lambda[r + a] - res / da : real(0);
         }
         const real limit = contacts[cd.owner[r]].friction * ln;
         const real mag = std::sqrt(lt[0] * lt[0] + lt[1] * lt[1]);
@@ -440,6 +453,7 @@ template <int N, int C, int W = 1>
         for (int a = 1; a <= 2; ++a) {
           const real v = lt[a - 1] * scale;
           change = std::max(change, std::fabs(v - cd.lambda[r + a]) * cd.W[r + a][r + a]);
+          apply(r + a, v - cd.lambda[r + a]);
           cd.lambda[r + a] = v;
         }
         r += 3;
@@ -448,6 +462,7 @@ template <int N, int C, int W = 1>
       real l = cd.lambda[r] - residual(r) / diag;
       l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
       change = std::max(change, std::fabs(l - cd.lambda[r]) * diag);
+      apply(r, l - cd.lambda[r]);
       cd.lambda[r] = l;
       ++r;
     }

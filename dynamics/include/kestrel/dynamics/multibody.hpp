@@ -195,6 +195,16 @@ inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, 
   return s;
 }
 
+/// joint_column(m, d, i, c) . f without forming the column: for the free joint, whose columns are
+/// unit vectors, the one component of f it picks (CRBA and RNEA take these dot products for every
+/// column of the base against every body's force; forming and summing a six-vector of zeros for
+/// each was a fifth of CRBA).
+template <int N>
+inline real column_dot(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const Vec6& f) {
+  if (m.joint[i] == JointType::free) return f[c < 3 ? 3 + c : c - 3];
+  return d.S[i].dot(f);
+}
+
 /// S qd for joint i's coordinates starting at qd (nullptr or a fixed joint: zero).
 template <int N>
 inline Vec6 joint_motion(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, const real* v) {
@@ -254,8 +264,14 @@ __attribute__((noinline)) bool base_quaternion_ok(const MultibodyModel<N>& m, co
 /// needs (zero for a motion the tree can make on its own).
 template <int N>
 void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* qdd, real* tau,
-          const Vec6* f_ext = nullptr) {
-  detail::update_kinematics(m, d, q);
+          const Vec6* f_ext = nullptr);
+
+namespace detail {
+/// rnea's two passes over kinematics (Xup, S) already at q: a caller that has just run crba or
+/// forward_kinematics at the same q (step_constrained) skips computing them again.
+template <int N>
+void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd, const real* qdd, real* tau,
+                 const Vec6* f_ext) {
   const Vec6 a0 = detail::base_acceleration(m);
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], p = m.parent[i];
@@ -271,12 +287,20 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
     if (m.joint[i] == JointType::free) {
-      for (int c = 0; c < 6; ++c) tau[k + c] = detail::joint_column(m, d, i, c).dot(d.f[i]);
+      for (int c = 0; c < 6; ++c) tau[k + c] = detail::column_dot(m, d, i, c, d.f[i]);
     } else if (k >= 0) {
       tau[k] = d.S[i].dot(d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
     }
     if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
   }
+}
+}  // namespace detail
+
+template <int N>
+void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* qdd, real* tau,
+          const Vec6* f_ext) {
+  detail::update_kinematics(m, d, q);
+  detail::rnea_passes(m, d, qd, qdd, tau, f_ext);
 }
 
 /// The joint-space mass matrix H (num_dofs x num_dofs, row-major in H[ld * row + col], ld >=
@@ -299,14 +323,14 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
       const Vec6 Si = detail::joint_column(m, d, i, c);
       Vec6 F = rigid_times(d.Ic[i], Si);
       for (int c2 = 0; c2 <= c; ++c2)  // the block of joint i itself
-        H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::joint_column(m, d, i, c2).dot(F);
+        H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::column_dot(m, d, i, c2, F);
       H[ld * k + k] += m.armature[i];
       for (int j = i; m.parent[j] >= 0;) {
         F = apply_force_transpose(d.Xup[j], F);
         j = m.parent[j];
         const int kj = m.dof_index[j];
         for (int cj = 0; cj < joint_dofs(m, j); ++cj)
-          H[ld * k + kj + cj] = H[ld * (kj + cj) + k] = F.dot(detail::joint_column(m, d, j, cj));
+          H[ld * k + kj + cj] = H[ld * (kj + cj) + k] = detail::column_dot(m, d, j, cj, F);
       }
     }
   }
@@ -392,11 +416,19 @@ template <int N>
 
 /// Every body's pose in the world: X_world[i] maps world coordinates to body i's (Plücker
 /// transform world -> body; r is the body origin in world coordinates, E^T its orientation).
+namespace detail {
+/// forward_kinematics over Xup already at q.
+template <int N>
+void world_poses(const MultibodyModel<N>& m, const MultibodyData<N>& d, Transform* X_world) {
+  for (int i = 0; i < m.num_bodies; ++i)
+    X_world[i] = m.parent[i] >= 0 ? compose(d.Xup[i], X_world[m.parent[i]]) : d.Xup[i];
+}
+}  // namespace detail
+
 template <int N>
 void forward_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, Transform* X_world) {
   detail::update_kinematics(m, d, q);
-  for (int i = 0; i < m.num_bodies; ++i)
-    X_world[i] = m.parent[i] >= 0 ? compose(d.Xup[i], X_world[m.parent[i]]) : d.Xup[i];
+  detail::world_poses(m, d, X_world);
 }
 
 /// The Jacobian of a point fixed on a body: J (6 x num_dofs, row-major in J[ld * row + col])
@@ -411,13 +443,20 @@ void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const
   const Vec3 p_w = X_world[body].r + X_world[body].E.transpose() * point_b;
   for (int j = body; j >= 0; j = m.parent[j]) {
     const int k0 = m.dof_index[j];
+    const Mat3 Et = X_world[j].E.transpose();
     for (int c = 0; c < joint_dofs(m, j); ++c) {
       // Joint j's motion subspace in world coordinates: angular w, linear v at the world origin.
-      const Vec6 Sj = detail::joint_column(m, d, j, c);
-      const Mat3 Et = X_world[j].E.transpose();
-      const Vec3 w = Et * ang(Sj);
-      const Vec3 v = Et * lin(Sj) + X_world[j].r.cross(w);
-      const Vec3 v_p = v + w.cross(p_w);
+      // A free joint's columns are unit motions of the base: its axes, Et's columns.
+      Vec3 w, v_p;
+      if (m.joint[j] == JointType::free) {
+        w = c < 3 ? Vec3::Zero() : Vec3(Et.col(c - 3));
+        v_p = c < 3 ? Vec3(Et.col(c)) : Vec3(X_world[j].r.cross(w) + w.cross(p_w));
+      } else {
+        const Vec6& Sj = d.S[j];
+        w = Et * ang(Sj);
+        const Vec3 v = Et * lin(Sj) + X_world[j].r.cross(w);
+        v_p = v + w.cross(p_w);
+      }
       for (int a = 0; a < 3; ++a) {
         J[ld * a + k0 + c] = v_p[a];
         J[ld * (3 + a) + k0 + c] = w[a];
