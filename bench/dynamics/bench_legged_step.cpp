@@ -17,7 +17,8 @@
 //    project's default `real` (float, as kestrel_sim is built). Every collision geom of the robot
 //    that the core's half-space collider takes (sphere, capsule, box: feet, calves, thighs, trunk)
 //    becomes a dynamics::CollisionShape. One physics step = the joint PD below, forward_kinematics,
-//    collide_halfspace against HalfSpace() (z = 0) and step_constrained(..., drive_kp, drive_kd)
+//    collide_halfspace against HalfSpace() (z = 0) and step_constrained(..., drive_kp, drive_kd) (reusing
+//    that forward kinematics, ConstraintParams::poses_current, as the simulator does)
 //    (the PD's gains taken implicitly; a joint whose torque is clipped gets none that step).
 //  - The PD on every leg joint toward the `home` keyframe's angles, legged_gym's gains (Go2: kp 20
 //    N m/rad, kd 0.5 N m s/rad; ANYmal C: 80 / 2), clipped at the joint's effort limit.
@@ -188,8 +189,10 @@ struct KestrelSide {
       n = kMaxContacts;
     }
     contacts_last = n;
-    return dy::step_constrained(m, data, cd, q.data(), qd.data(), tau.data(), static_cast<real>(kDt), contacts, n,
-                                dy::ConstraintParams(), kp_step.data(), kd_step.data(), &warm);
+    dy::ConstraintParams params;
+    params.poses_current = true;  // forward_kinematics just above, as the simulator's physics step
+    return dy::step_constrained(m, data, cd, q.data(), qd.data(), tau.data(), static_cast<real>(kDt), contacts, n, params,
+                                kp_step.data(), kd_step.data(), &warm);
   }
 
   double normal_force() const {
@@ -515,7 +518,7 @@ int main(int argc, char** argv) {
   char header[1400];
   std::snprintf(header, sizeof header,
                 "machine %s (%s, %ld logical CPUs), one thread; compiler GCC-compatible %s, flags %s; Kestrel real = %s "
-                "(the project's default build, kestrel_sim's loader), PGS defaults (ConstraintParams()), contact margin "
+                "(the project's default build, kestrel_sim's loader), PGS defaults (ConstraintParams(), poses_current: the step reuses the collision's forward kinematics), contact margin "
                 "0.01 m; MuJoCo %s in double, %s (file_defaults) / %s (elliptic_impratio100); dt %g s, settle %g s, "
                 "best of %d reps x %ld steps, interleaved; sanity figures: means over the last 0.2 s of the settling",
                 machine.c_str(), cpu_model().c_str(), sysconf(_SC_NPROCESSORS_ONLN), __VERSION__, KESTREL_BENCH_CXX_FLAGS,

@@ -157,6 +157,7 @@ class ArticulatedSimulator final : public Simulator {
     if (c.robot.self_collisions && !build_self_pairs(pre, error)) return false;
     if (!Terrain::build(c.env.terrain, c.seed, terrain_, error)) return false;
     params_.iterations = c.sim.solver_iterations;
+    params_.poses_current = true;  // step() runs forward_kinematics into the step's own scratch for its collisions
 
     allocate_views(c, static_cast<int>(dof_v_.size()), 0);
     num_dofs_ = static_cast<int>(dof_v_.size());

@@ -161,6 +161,7 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
   }
   im.params = dy::ConstraintParams();
   im.params.iterations = cfg.solver_iterations;
+  im.params.poses_current = true;  // step() runs forward_kinematics into im.cd for its collisions
   cfg_ = cfg;
   robot_ = std::move(robot);
   rng_ = RngStream(seed, env_index, kPurposeObjectPose);

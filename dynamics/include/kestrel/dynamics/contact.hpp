@@ -83,6 +83,10 @@ struct ConstraintParams {
   real restitution_threshold_mps = real(0.5);  // slower impacts do not bounce
   real limit_margin = real(0.02);           // rad or m: a joint this close to a limit gets its row
   real regularization = real(1e-6);         // relative constraint force mixing on W's diagonal
+  // True when the caller has just run forward_kinematics(m, d, q, cd.X_world) with the same d, cd
+  // and q (for its collision tests, as the simulator does) and changed none of them since: the
+  // step then takes those kinematics instead of computing them again (a tenth of a legged step).
+  bool poses_current = false;
 };
 
 enum class RowKind : std::uint8_t { normal = 0, tangent = 1, limit = 2, joint_friction = 3 };
@@ -232,11 +236,12 @@ template <int N, int C, int W = 1>
 
   // The unconstrained step: (H + h D) a = tau - bias, bias = rnea at zero acceleration (Coriolis,
   // centrifugal, gravity and the damping force D qd).
-  crba(m, d, q, &cd.H[0][0], kDofs);
+  if (!p.poses_current) detail::update_kinematics(m, d, q);
+  detail::crba_passes(m, d, &cd.H[0][0], kDofs);
   for (int i = 0; i < m.num_bodies; ++i)
     if (m.dof_index[i] >= 0 && m.joint[i] != JointType::free) cd.H[m.dof_index[i]][m.dof_index[i]] += dt_s * m.damping[i];
   real zero[kDofs] = {}, acc[kDofs];
-  detail::rnea_passes(m, d, qd, zero, acc, static_cast<const Vec6*>(nullptr));  // crba left the kinematics at q
+  detail::rnea_passes(m, d, qd, zero, acc, static_cast<const Vec6*>(nullptr));  // the kinematics at q, as crba's
   for (int k = 0; k < n; ++k) acc[k] = tau[k] - acc[k];
   if (drive_kp != nullptr || drive_kd != nullptr) {
     // The drives' torques in tau, kp (q* - q) - kd qd, taken at the end of the step:
@@ -256,7 +261,7 @@ template <int N, int C, int W = 1>
   if (!all_finite(v_free, n)) return Status::non_finite_input;
 
   // The rows.
-  detail::world_poses(m, d, cd.X_world);  // still at q
+  if (!p.poses_current) detail::world_poses(m, d, cd.X_world);  // the kinematics still at q
   int rows = 0;
   auto new_row = [&](RowKind kind, int owner) -> int {
     const int r = rows++;

@@ -307,10 +307,14 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
 /// num_dofs, every entry written: zero between joints on different branches), symmetric
 /// positive definite for a valid model.
 template <int N>
-void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld) {
+void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld);
+
+namespace detail {
+/// crba over kinematics (Xup, S) already at q (see rnea_passes).
+template <int N>
+void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int ld) {
   for (int r = 0; r < m.num_dofs; ++r)
     for (int c = 0; c < m.num_dofs; ++c) H[ld * r + c] = 0;
-  detail::update_kinematics(m, d, q);
   // Composite inertias, in their 10-number rigid-body form (RigidInertia: a sum of rigid bodies
   // is one; about 3x fewer operations per body than the 6 x 6 X^T I X).
   for (int i = 0; i < m.num_bodies; ++i) d.Ic[i] = rigid_inertia(m.body[i]);
@@ -334,6 +338,13 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
       }
     }
   }
+}
+}  // namespace detail
+
+template <int N>
+void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld) {
+  detail::update_kinematics(m, d, q);
+  detail::crba_passes(m, d, H, ld);
 }
 
 /// Forward dynamics: the accelerations qdd[num_dofs] under the joint forces tau at (q, qd), with
