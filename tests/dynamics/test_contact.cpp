@@ -632,3 +632,66 @@ KTEST(Contact, ConvexPointsCollideWithAHalfSpaceThroughTheirDeepestVertices) {
   ball.size = Vec3(0.5_r, 0, 0);
   KEXPECT_EQ(dy::collide_shapes(cube, X[0], ball, X[0], 0.01_r, c, 16), 0);
 }
+
+// A heavy base (a 50 kg box, ANYmal's order) lying on the ground with two two-link legs stretched
+// out sideways to spheres that rest on it too, the joints with dry friction: a resting tree with
+// contact, cone and joint rows coupled through the base. Warm-started, once settled each step's
+// PGS stops within a sweep or two (it converged: a sweep that starts converged changes nothing),
+// far below its cap (a solver whose residuals drift by rounding keeps changing at the tolerance
+// and runs to the cap every step); and the step given the caller's kinematics
+// (ConstraintParams::poses_current) is bit for bit the step that computes them.
+KTEST(Contact, ARestingTreeConvergesInASweepOrTwoAndReusedPosesChangeNothing) {
+  auto& w = ktest::scratch<World<5, 8>>();
+  auto& m = w.m;
+  auto& d = w.d;
+  auto& cd = w.cd;
+  two_legged_tree(m, [&m](int i) {
+    const real side = i <= 2 ? real(1) : real(-1);
+    m.X_tree[i].r = Vec3(side * 0.25_r, 0, 0);  // the base's side, then the next link's end
+    m.body[i] = solid(1, Vec3::Constant(real(5e-3)));
+    m.body[i].com = Vec3(side * 0.125_r, 0, 0);
+    m.friction_loss[i] = 0.5_r;
+  });
+  m.body[0] = solid(50, Vec3(0.5_r, 1.0_r, 1.2_r));
+  KASSERT_EQ(dy::finish_model(m), Status::ok);
+  dy::CollisionShape shapes[5];
+  for (int i = 0; i < 5; ++i) {
+    shapes[i].body = i;
+    shapes[i].type = i == 0 ? dy::ShapeType::box : dy::ShapeType::sphere;
+    shapes[i].size = i == 0 ? Vec3(0.25_r, 0.15_r, 0.05_r) : Vec3(0.05_r, 0, 0);
+    shapes[i].p_b = i == 0 ? Vec3::Zero() : Vec3((i <= 2 ? real(1) : real(-1)) * 0.25_r, 0, 0);
+    shapes[i].friction = 0.8_r;
+  }
+  static dy::WarmStart<32> warm;
+  warm.count = 0;
+  real q[11] = {0, 0, 0.05_r, 0, 0, 0, 1}, qd[10] = {};
+  const real tau[10] = {};
+  auto step = [&](real* qs, real* qds, dy::WarmStart<32>& ws, bool poses_current) {
+    dy::ContactPoint contacts[8];
+    dy::forward_kinematics(m, d, qs, cd.X_world);
+    const int found = dy::collide_halfspace(shapes, 5, cd.X_world, dy::HalfSpace(), real(0.01), contacts, 8);
+    dy::ConstraintParams p;
+    p.poses_current = poses_current;
+    return dy::step_constrained(m, d, cd, qs, qds, tau, 0.005_r, contacts, std::min(found, 8), p, nullptr, nullptr, &ws);
+  };
+  for (int k = 0; k < 200; ++k) KASSERT_EQ(step(q, qd, warm, false), Status::ok);  // 1 s to settle
+  int sweeps = 0, rows = 0;
+  for (int k = 0; k < 40; ++k) {
+    KASSERT_EQ(step(q, qd, warm, false), Status::ok);
+    sweeps += cd.iterations_used;
+    rows = cd.num_rows;
+  }
+  KEXPECT_GE(rows, 16);  // 4 box corners and 4 feet: 8 contacts x 3 rows, and 4 dry-friction rows
+  KEXPECT_LE(sweeps, 40 * 2);  // 1 per step here; residuals kept only incrementally took 217
+  KEXPECT_LT(std::fabs(q[2] - 0.05_r), real(2e-3));  // the base rests where it lay
+  // The same step from the same state, with and without the reused kinematics.
+  real q2[11], qd2[10];
+  for (int k = 0; k < 11; ++k) q2[k] = q[k];
+  for (int k = 0; k < 10; ++k) qd2[k] = qd[k];
+  static dy::WarmStart<32> warm2;
+  warm2 = warm;
+  KASSERT_EQ(step(q, qd, warm, false), Status::ok);
+  KASSERT_EQ(step(q2, qd2, warm2, true), Status::ok);
+  for (int k = 0; k < 11; ++k) KEXPECT_EQ(q2[k], q[k]);
+  for (int k = 0; k < 10; ++k) KEXPECT_EQ(qd2[k], qd[k]);
+}

@@ -184,6 +184,9 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, T
   }
 }
 
+/// The spatial component [angular; linear] that the free joint's velocity coordinate c moves.
+inline int free_column_component(int c) { return c < 3 ? 3 + c : c - 3; }
+
 /// Column c of joint i's motion subspace (c < joint_dofs): S for a one-dof joint; for the free
 /// joint, the base-frame unit motions in the velocity coordinates' order [v; w] (linear first, as
 /// Pinocchio), which are spatial [0; e_c] for c < 3 and [e_(c-3); 0] after.
@@ -191,7 +194,7 @@ template <int N>
 inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c) {
   if (m.joint[i] != JointType::free) return d.S[i];
   Vec6 s = Vec6::Zero();
-  s[c < 3 ? 3 + c : c - 3] = 1;
+  s[free_column_component(c)] = 1;
   return s;
 }
 
@@ -201,7 +204,7 @@ inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, 
 /// each was a fifth of CRBA).
 template <int N>
 inline real column_dot(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const Vec6& f) {
-  if (m.joint[i] == JointType::free) return f[c < 3 ? 3 + c : c - 3];
+  if (m.joint[i] == JointType::free) return f[free_column_component(c)];
   return d.S[i].dot(f);
 }
 
@@ -425,8 +428,6 @@ template <int N>
   return Status::ok;
 }
 
-/// Every body's pose in the world: X_world[i] maps world coordinates to body i's (Plücker
-/// transform world -> body; r is the body origin in world coordinates, E^T its orientation).
 namespace detail {
 /// forward_kinematics over Xup already at q.
 template <int N>
@@ -436,6 +437,8 @@ void world_poses(const MultibodyModel<N>& m, const MultibodyData<N>& d, Transfor
 }
 }  // namespace detail
 
+/// Every body's pose in the world: X_world[i] maps world coordinates to body i's (Plücker
+/// transform world -> body; r is the body origin in world coordinates, E^T its orientation).
 template <int N>
 void forward_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, Transform* X_world) {
   detail::update_kinematics(m, d, q);
