@@ -35,7 +35,9 @@
 #include <pinocchio/multibody.hpp>
 #endif
 
+#if defined(KESTREL_BENCH_WITH_PINOCCHIO)
 static_assert(sizeof(kestrel::real) == 8, "the side by side is in double: build with KESTREL_USE_DOUBLE=1");
+#endif
 
 namespace {
 namespace dy = kestrel::dynamics;
@@ -99,7 +101,7 @@ pinocchio::Model to_pinocchio(const dy::MultibodyModel<13>& m) {
 #endif
 
 struct Row {
-  const char* algorithm;
+  const char* algorithm;  // aba_batch4: ns per robot of one aba_batch call over 4 lanes (the call / 4)
   const char* base;
   double kestrel_ns;
   double pinocchio_ns;  // < 0: not measured
@@ -127,16 +129,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "kestrel_bench_dynamics: --calls and --reps must be positive\n");
     return 2;
   }
-  Row rows[6];
+  Row rows[8];
   int n_rows = 0;
 #if defined(KESTREL_BENCH_WITH_PINOCCHIO)
   const int sides = 2;
 #else
   const int sides = 1;
 #endif
-  // 2 bases x 3 algorithms x the sides, reps x calls each.
+  // 2 bases x (3 algorithms x the sides + the batched ABA), reps x calls each.
   kestrel::sim::ProgressLine progress(stderr, kestrel::sim::ProgressLine::enabled_for(quiet),
-                                      6.0 * sides * static_cast<double>(reps) * static_cast<double>(calls), "calls");
+                                      (6.0 * sides + 2.0) * static_cast<double>(reps) * static_cast<double>(calls), "calls");
   g_progress = &progress;
   for (int fl = 0; fl < 2; ++fl) {
     const bool floating = fl == 1;
@@ -154,6 +156,37 @@ int main(int argc, char** argv) {
     const double k_aba = best_ns_per_call([&] { g_sink = g_sink + static_cast<double>(dy::aba(m, d, q, qd, tau, out)); }, calls, reps);
     real aba_out[18];
     (void)dy::aba(m, d, q, qd, tau, aba_out);
+    // The 4-lane batched ABA (dynamics/lanes.hpp): four robots in four states (the joints and
+    // joint velocities moved per lane), each lane checked bit for bit against the scalar aba.
+    using T4 = dy::Lanes<4>;
+    static dy::MultibodyBatchData<13, 4> bd;
+    T4 q4[19] = {}, qd4[18] = {}, tau4[18] = {}, out4[18] = {};
+    real ql[4][19], qdl[4][18];
+    const int first_joint_q = floating ? 7 : 0, first_joint_v = floating ? 6 : 0;
+    for (int l = 0; l < 4; ++l) {
+      for (int k = 0; k < nq; ++k) ql[l][k] = q[k] + (k >= first_joint_q ? real(0.05) * static_cast<real>(l) : real(0));
+      for (int k = 0; k < nv; ++k) qdl[l][k] = qd[k] + (k >= first_joint_v ? real(0.1) * static_cast<real>(l) : real(0));
+      for (int k = 0; k < nq; ++k) q4[k][l] = ql[l][k];
+      for (int k = 0; k < nv; ++k) {
+        qd4[k][l] = qdl[l][k];
+        tau4[k][l] = tau[k];
+      }
+    }
+    const double k_aba4 = best_ns_per_call([&] { g_sink = g_sink + static_cast<double>(dy::aba_batch(m, bd, q4, qd4, tau4, out4)); },
+                                           calls, reps) / 4;
+    for (int l = 0; l < 4; ++l) {
+      real want[18];
+      if (dy::aba(m, d, ql[l], qdl[l], tau, want) != kestrel::Status::ok) {
+        std::fprintf(stderr, "kestrel_bench_dynamics: aba refused lane %d's state\n", l);
+        return 1;
+      }
+      for (int k = 0; k < nv; ++k)
+        if (std::memcmp(&want[k], &out4[k][l], sizeof(real)) != 0) {
+          std::fprintf(stderr, "kestrel_bench_dynamics: aba_batch lane %d coordinate %d differs from aba: %.17g vs %.17g\n", l, k,
+                       static_cast<double>(out4[k][l]), static_cast<double>(want[k]));
+          return 1;
+        }
+    }
     const double k_rnea = best_ns_per_call([&] { dy::rnea(m, d, q, qd, qdd, out); g_sink = g_sink + out[0]; }, calls, reps);
     const double k_crba = best_ns_per_call([&] { dy::crba(m, d, q, H, nv); g_sink = g_sink + H[0]; }, calls, reps);
     double p_aba = -1, p_rnea = -1, p_crba = -1, d_aba = 0, d_rnea = 0, d_crba = 0;
@@ -175,25 +208,30 @@ int main(int argc, char** argv) {
 #endif
     (void)nq;
     rows[n_rows++] = {"aba", base, k_aba, p_aba, d_aba};
+    rows[n_rows++] = {"aba_batch4", base, k_aba4, p_aba, d_aba};
     rows[n_rows++] = {"rnea", base, k_rnea, p_rnea, d_rnea};
     rows[n_rows++] = {"crba", base, k_crba, p_crba, d_crba};
   }
   progress.finish();
   g_progress = nullptr;
-  std::printf("quadruped tree (bench/dynamics/quadruped_tree.hpp), double, one thread, best of %d x %ld calls\n", reps, calls);
+  const char* precision = sizeof(real) == 8 ? "double" : "float";
+  std::printf("quadruped tree (bench/dynamics/quadruped_tree.hpp), %s, one thread, best of %d x %ld calls "
+              "(aba_batch4: per robot of a 4-lane call, its lanes bit-identical to aba; ratio against Pinocchio's aba)\n",
+              precision, reps, calls);
   std::printf("  %-5s %-15s %12s %14s %10s %14s\n", "algo", "base", "kestrel ns", "pinocchio ns", "ratio", "max |diff|");
   FILE* f = csv != nullptr ? std::fopen(csv, "w") : nullptr;
   if (csv != nullptr && f == nullptr) {
     std::fprintf(stderr, "kestrel_bench_dynamics: cannot write --csv %s\n", csv);
     return 1;
   }
-  if (f != nullptr) std::fprintf(f, "algorithm,base,kestrel_ns,pinocchio_ns,pinocchio_over_kestrel,max_abs_diff\n");
+  if (f != nullptr) std::fprintf(f, "precision,algorithm,base,kestrel_ns,pinocchio_ns,pinocchio_over_kestrel,max_abs_diff\n");
   for (int i = 0; i < n_rows; ++i) {
     const Row& r = rows[i];
     const double ratio = r.pinocchio_ns > 0 ? r.pinocchio_ns / r.kestrel_ns : 0;
     std::printf("  %-5s %-15s %12.1f %14.1f %10.2f %14.3g\n", r.algorithm, r.base, r.kestrel_ns, r.pinocchio_ns, ratio, r.max_abs_diff);
     if (f != nullptr)
-      std::fprintf(f, "%s,%s,%.1f,%.1f,%.3f,%.3g\n", r.algorithm, r.base, r.kestrel_ns, r.pinocchio_ns, ratio, r.max_abs_diff);
+      std::fprintf(f, "%s,%s,%s,%.1f,%.1f,%.3f,%.3g\n", precision, r.algorithm, r.base, r.kestrel_ns, r.pinocchio_ns, ratio,
+                   r.max_abs_diff);
   }
   if (f != nullptr) std::fclose(f);
 #if defined(KESTREL_BENCH_WITH_PINOCCHIO)

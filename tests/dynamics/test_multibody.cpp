@@ -5,6 +5,7 @@
 // Jacobians against the twists of RNEA's forward pass; the same on floating-base trees, and a free
 // body against Newton-Euler; refusals; no heap.
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "kestrel/dynamics/multibody.hpp"
@@ -411,4 +412,85 @@ KTEST(Multibody, SemiImplicitEulerIsStableAndKeepsEnergy) {
     KEXPECT_TRUE(fq[2] == z_before && fqd[2] == v_before);
     KEXPECT_NO_HEAP((void)dy::step_semi_implicit(m, fd, fq, fqd, zero, dt));
   }
+}
+
+namespace {
+// The bits of a real, for comparisons that must be exact (NaN or -0 included).
+std::uint64_t bits_of(real v) {
+  std::uint64_t b = 0;
+  std::memcpy(&b, &v, sizeof(real));
+  return b;
+}
+dy::MultibodyBatchData<kMax, 4> g_batch;
+}  // namespace
+
+// The batched ABA (4 lanes) gives every lane the bits the scalar aba gives that robot alone: on
+// random fixed and floating trees with armature, damping, implicit damping and external forces,
+// and lanes it refuses (a NaN torque, an off-unit quaternion) keep their outputs while the others
+// are computed. The scalar path is the same kernel, so this also pins that the kernel's lane code
+// (vector operations, per-lane sin/cos/sqrt) computes what its scalar instantiation does.
+KTEST(Multibody, BatchedAbaIsBitIdenticalToTheScalarOne) {
+  constexpr int L = 4, kDofs = dy::max_dofs<kMax>();
+  using T = dy::Lanes<L>;
+  int compared = 0, refused_seen = 0;
+  for (std::uint32_t tree = 0; tree < 24; ++tree) {
+    dy::MultibodyModel<kMax>& m = g_model;
+    m = dy::MultibodyModel<kMax>();
+    const bool floating = tree % 2 == 1;
+    random_tree(m, (floating ? 2 : 3) + static_cast<int>(tree % 6), tree, floating);
+    KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+    RngStream r(11, tree, 3);
+    real q[L][kDofs + 1] = {}, qd[L][kDofs] = {}, tau[L][kDofs] = {};
+    T qb[kDofs + 1] = {}, qdb[kDofs] = {}, taub[kDofs] = {}, qddb[kDofs] = {};
+    dy::detail::LaneVec6<T> fb[kMax] = {};
+    Vec6 f[L][kMax];
+    const bool with_f = tree % 3 == 0;
+    const real h = tree % 4 == 0 ? 0.005_r : 0;
+    for (int l = 0; l < L; ++l) {
+      random_state(m, r, q[l], qd[l]);
+      for (int k = 0; k < m.num_dofs; ++k) tau[l][k] = r.uniform(-5, 5);
+      for (int b = 0; b < m.num_bodies; ++b)
+        for (int a = 0; a < 6; ++a) f[l][b][a] = with_f ? r.uniform(-2, 2) : 0;
+    }
+    // Lane 2 of every third tree gets a NaN torque, lane 3 of floating ones an off-unit quaternion.
+    const bool nan_lane = tree % 3 == 1;
+    if (nan_lane) tau[2][m.num_dofs - 1] = std::numeric_limits<real>::quiet_NaN();
+    const bool bad_quat = floating && tree % 4 == 1;
+    if (bad_quat)
+      for (int a = 3; a < 7; ++a) q[3][m.q_index[0] + a] *= 1.01_r;
+    for (int l = 0; l < L; ++l) {
+      for (int k = 0; k < m.num_q; ++k) qb[k][l] = q[l][k];
+      for (int k = 0; k < m.num_dofs; ++k) {
+        qdb[k][l] = qd[l][k];
+        taub[k][l] = tau[l][k];
+        qddb[k][l] = real(-7);  // kept where a lane is refused
+      }
+      for (int b = 0; b < m.num_bodies; ++b)
+        for (int a = 0; a < 6; ++a) fb[b][a][l] = f[l][b][a];
+    }
+    unsigned refused = 0;
+    KEXPECT_NO_HEAP(refused = dy::aba_batch(m, g_batch, qb, qdb, taub, qddb, with_f ? fb : nullptr, h));
+    for (int l = 0; l < L; ++l) {
+      real want[kDofs] = {};
+      const Status st = dy::aba(m, g_data, q[l], qd[l], tau[l], want, with_f ? f[l] : nullptr, h);
+      KEXPECT_EQ(((refused >> l) & 1u) != 0, st != Status::ok);
+      if (st != Status::ok) {
+        ++refused_seen;
+        for (int k = 0; k < m.num_dofs; ++k) KEXPECT_EQ(qddb[k][l], real(-7));
+        continue;
+      }
+      for (int k = 0; k < m.num_dofs; ++k) {
+        KEXPECT_EQ(bits_of(qddb[k][l]), bits_of(want[k]));
+        ++compared;
+      }
+    }
+    if (nan_lane) {
+      KEXPECT_TRUE(((refused >> 2) & 1u) != 0);
+    }
+    if (bad_quat) {
+      KEXPECT_TRUE(((refused >> 3) & 1u) != 0);
+    }
+  }
+  KEXPECT_GT(compared, 500);
+  KEXPECT_GT(refused_seen, 8);
 }

@@ -32,6 +32,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "kestrel/dynamics/lanes.hpp"
 #include "kestrel/dynamics/spatial.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/status.hpp"
@@ -181,6 +182,17 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, T
       S = Vec6::Zero();
       return;
     }
+  }
+}
+
+/// The motion subspace S of a revolute or prismatic joint ([axis; 0], [0; axis]); zero for a fixed
+/// joint and for the free joint (whose columns joint_column gives).
+template <int N>
+inline Vec6 motion_subspace(const MultibodyModel<N>& m, int i) {
+  switch (m.joint[i]) {
+    case JointType::revolute: return spatial(m.axis[i], Vec3::Zero());
+    case JointType::prismatic: return spatial(Vec3::Zero(), m.axis[i]);
+    default: return Vec6::Zero();
   }
 }
 
@@ -350,11 +362,419 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
   detail::crba_passes(m, d, H, ld);
 }
 
+// Lane values wider than the registers: see lanes.hpp on -Wpsabi.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace detail {
+
+/// Storage of the batched ABA (MultibodyBatchData): the scalar path's Eigen types' element access,
+/// v[k] and M(r, c), over arrays of lane values.
+template <class T>
+struct LaneVec3 {
+  T v[3];
+  T& operator[](int k) { return v[k]; }
+  const T& operator[](int k) const { return v[k]; }
+};
+template <class T>
+struct LaneVec6 {
+  T v[6];
+  T& operator[](int k) { return v[k]; }
+  const T& operator[](int k) const { return v[k]; }
+};
+template <class T, int R>
+struct LaneMat {
+  T m[R * R];
+  T& operator()(int r, int c) { return m[R * r + c]; }
+  const T& operator()(int r, int c) const { return m[R * r + c]; }
+};
+template <class T>
+struct LaneTransform {
+  LaneMat<T, 3> E;
+  LaneVec3<T> r;
+};
+
+/// Forward dynamics over any lane type T (real: one robot; Lanes<L>: L robots of one model),
+/// Featherstone's articulated-body algorithm (RBDA table 7.1) with every spatial product written
+/// out in 3 x 3 blocks:
+///  - an articulated inertia is kept as its blocks [A B; B^T C] (A, C symmetric; the lower-left
+///    block is never stored) and carried to the parent as X^T I X = [1 r x; 0 1] (E^T I E)
+///    [1 0; -r x 1] (RBDA eq. 2.24's factors): three 3 x 3 congruences by E, then three products
+///    with the skew matrix r x, about 200 multiplications where the dense 6 x 6 form takes 864;
+///  - a revolute (prismatic) joint's U = I S takes the three angular (linear) columns of I
+///    against the axis;
+///  - the free joint's 6 x 6 solve is a Cholesky factorisation written out (the same operations
+///    in every lane, where Eigen's LLT would differ between a scalar and a vector type).
+/// D is MultibodyData (T = real) or MultibodyBatchData (lanes); F the external-force vectors
+/// (nullptr: none). q, qd, tau: the coordinates, lane values; out[num_dofs] receives qdd. The
+/// inputs are checked by the callers. Returns the lanes (bit l) whose articulated inertia was
+/// singular or whose accelerations are not finite; their `out` lanes are then meaningless.
+template <class T, int N, class D, class F>
+unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, const T* tau, T* out, const F* f_ext,
+                    real implicit_damping_dt) {
+  using lanes::splat;
+  unsigned bad = 0;
+  // Pass 1, base to tips: Xup = X_J(q) X_tree, velocities, velocity-product accelerations c,
+  // the bodies' own inertias and bias forces.
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], kq = m.q_index[i], p = m.parent[i];
+    const Transform& Xt = m.X_tree[i];
+    const Vec3& ax = m.axis[i];
+    auto& X = d.Xup[i];
+    auto& v = d.v[i];
+    auto& c = d.c[i];
+    T vJ[6] = {};
+    switch (m.joint[i]) {
+      case JointType::revolute: {
+        // E = R(q)^T E_tree, R the rotation by q about the axis (Rodrigues); r = r_tree.
+        const T co = lanes::cos(q[kq]), si = lanes::sin(q[kq]), t = splat<T>(1) - co;
+        const real xx = ax[0] * ax[0], yy = ax[1] * ax[1], zz = ax[2] * ax[2];
+        const real xy = ax[0] * ax[1], xz = ax[0] * ax[2], yz = ax[1] * ax[2];
+        const T sx = si * ax[0], sy = si * ax[1], sz = si * ax[2];
+        T R[3][3];
+        R[0][0] = t * xx + co;
+        R[0][1] = t * xy - sz;
+        R[0][2] = t * xz + sy;
+        R[1][0] = t * xy + sz;
+        R[1][1] = t * yy + co;
+        R[1][2] = t * yz - sx;
+        R[2][0] = t * xz - sy;
+        R[2][1] = t * yz + sx;
+        R[2][2] = t * zz + co;
+        for (int r = 0; r < 3; ++r)
+          for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = R[0][r] * Xt.E(0, cc) + R[1][r] * Xt.E(1, cc) + R[2][r] * Xt.E(2, cc);
+        for (int r = 0; r < 3; ++r) X.r[r] = splat<T>(Xt.r[r]);
+        const T w = qd[k];
+        for (int a = 0; a < 3; ++a) {
+          vJ[a] = w * ax[a];
+          vJ[3 + a] = T{};
+        }
+        break;
+      }
+      case JointType::prismatic: {
+        // E = E_tree; r = r_tree + E_tree^T (axis q).
+        const Vec3 g = Xt.E.transpose() * ax;
+        for (int r = 0; r < 3; ++r) {
+          for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
+          X.r[r] = Xt.r[r] + g[r] * q[kq];
+        }
+        const T w = qd[k];
+        for (int a = 0; a < 3; ++a) {
+          vJ[a] = T{};
+          vJ[3 + a] = w * ax[a];
+        }
+        break;
+      }
+      case JointType::fixed:
+        for (int r = 0; r < 3; ++r) {
+          for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
+          X.r[r] = splat<T>(Xt.r[r]);
+        }
+        for (int a = 0; a < 6; ++a) vJ[a] = T{};
+        break;
+      case JointType::free: {
+        // X_J: E = R(Q)^T (Q base -> world, [x y z w]), r = the base's position; then X_tree.
+        const T x = q[kq + 3], y = q[kq + 4], z = q[kq + 5], w = q[kq + 6];
+        const T tx = x + x, ty = y + y, tz = z + z;
+        const T one = splat<T>(1);
+        T R[3][3];
+        R[0][0] = one - (ty * y + tz * z);
+        R[0][1] = tx * y - tz * w;
+        R[0][2] = tx * z + ty * w;
+        R[1][0] = tx * y + tz * w;
+        R[1][1] = one - (tx * x + tz * z);
+        R[1][2] = ty * z - tx * w;
+        R[2][0] = tx * z - ty * w;
+        R[2][1] = ty * z + tx * w;
+        R[2][2] = one - (tx * x + ty * y);
+        for (int r = 0; r < 3; ++r) {
+          for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = R[0][r] * Xt.E(0, cc) + R[1][r] * Xt.E(1, cc) + R[2][r] * Xt.E(2, cc);
+          X.r[r] = Xt.r[r] + (Xt.E(0, r) * q[kq] + Xt.E(1, r) * q[kq + 1] + Xt.E(2, r) * q[kq + 2]);
+        }
+        for (int a = 0; a < 3; ++a) {
+          vJ[a] = qd[k + 3 + a];
+          vJ[3 + a] = qd[k + a];
+        }
+        break;
+      }
+    }
+    // v = Xup v_parent + vJ (apply_motion: [E w; E (v - r x w)]); c = v x vJ (crm).
+    if (p >= 0) {
+      const auto& vp = d.v[p];
+      const T lw[3] = {vp[3] - (X.r[1] * vp[2] - X.r[2] * vp[1]), vp[4] - (X.r[2] * vp[0] - X.r[0] * vp[2]),
+                       vp[5] - (X.r[0] * vp[1] - X.r[1] * vp[0])};
+      for (int r = 0; r < 3; ++r) {
+        v[r] = (X.E(r, 0) * vp[0] + X.E(r, 1) * vp[1] + X.E(r, 2) * vp[2]) + vJ[r];
+        v[3 + r] = (X.E(r, 0) * lw[0] + X.E(r, 1) * lw[1] + X.E(r, 2) * lw[2]) + vJ[3 + r];
+      }
+    } else {
+      for (int r = 0; r < 6; ++r) v[r] = vJ[r];
+    }
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      c[r] = v[r1] * vJ[r2] - v[r2] * vJ[r1];
+      c[3 + r] = (v[r1] * vJ[3 + r2] - v[r2] * vJ[3 + r1]) + (v[3 + r1] * vJ[r2] - v[3 + r2] * vJ[r1]);
+    }
+    // The body's inertia at its origin (RBDA eq. 2.63) as blocks: A = Ic + m (|c|^2 1 - c c^T),
+    // B = m c x, C = m 1.
+    const SpatialInertia& b = m.body[i];
+    const Vec3& com = b.com;
+    const real cc2 = com.dot(com);
+    auto& I = d.IA[i];
+    for (int r = 0; r < 3; ++r)
+      for (int cc = 0; cc < 3; ++cc) {
+        I(r, cc) = splat<T>(b.inertia_com(r, cc) + b.mass * ((r == cc ? cc2 : real(0)) - com[r] * com[cc]));
+        I(3 + r, 3 + cc) = splat<T>(r == cc ? b.mass : real(0));
+      }
+    const real mc[3] = {b.mass * com[0], b.mass * com[1], b.mass * com[2]};
+    I(0, 3) = splat<T>(0), I(1, 4) = splat<T>(0), I(2, 5) = splat<T>(0);
+    I(0, 4) = splat<T>(-mc[2]), I(0, 5) = splat<T>(mc[1]);
+    I(1, 3) = splat<T>(mc[2]), I(1, 5) = splat<T>(-mc[0]);
+    I(2, 3) = splat<T>(-mc[1]), I(2, 4) = splat<T>(mc[0]);
+    // pA = v x* (I v) - f_ext, with I v = [Ic w + c x f; f], f = m (v_lin - c x w) (inertia_times).
+    T f[3], n[3];
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      f[r] = b.mass * (v[3 + r] - (com[r1] * v[r2] - com[r2] * v[r1]));
+    }
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      n[r] = (b.inertia_com(r, 0) * v[0] + b.inertia_com(r, 1) * v[1] + b.inertia_com(r, 2) * v[2]) +
+             (com[r1] * f[r2] - com[r2] * f[r1]);
+    }
+    auto& pA = d.pA[i];
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      pA[r] = (v[r1] * n[r2] - v[r2] * n[r1]) + (v[3 + r1] * f[r2] - v[3 + r2] * f[r1]);
+      pA[3 + r] = v[r1] * f[r2] - v[r2] * f[r1];
+    }
+    if (f_ext != nullptr)
+      for (int r = 0; r < 6; ++r) pA[r] = pA[r] - f_ext[i][r];
+  }
+  // Pass 2, tips to base: articulated inertias and bias forces, each carried to the parent.
+  for (int i = m.num_bodies - 1; i >= 0; --i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    if (m.joint[i] == JointType::free) continue;  // the root: solved in pass 3
+    auto& I = d.IA[i];
+    auto& pA = d.pA[i];
+    const auto& c = d.c[i];
+    T pa[6];
+    if (k >= 0) {
+      // U = I S, d = S^T U (+ armature + h damping), u = tau - damping qd - S^T pA; then
+      // Ia = I - U U^T / d and pa = pA + Ia c + U u / d.
+      const Vec3& ax = m.axis[i];
+      const int o = m.joint[i] == JointType::revolute ? 0 : 3;  // S's nonzero half
+      auto& U = d.U[i];
+      for (int r = 0; r < 6; ++r) {
+        // Row r of I against the axis; I's lower-left block is B^T (never stored).
+        const auto e = [&](int cc) -> T { return (r < 3 || o == 3) ? I(r, o + cc) : I(o + cc, r); };
+        U[r] = (e(0) * ax[0] + e(1) * ax[1]) + e(2) * ax[2];
+      }
+      const T dd = (ax[0] * U[o] + ax[1] * U[o + 1]) + ax[2] * U[o + 2] + (m.armature[i] + implicit_damping_dt * m.damping[i]);
+      bad |= lanes::not_positive(dd);
+      d.d[i] = dd;
+      d.u[i] = (tau[k] - m.damping[i] * qd[k]) - ((ax[0] * pA[o] + ax[1] * pA[o + 1]) + ax[2] * pA[o + 2]);
+      const T inv_d = splat<T>(1) / dd;
+      T Ud[6];
+      for (int r = 0; r < 6; ++r) Ud[r] = U[r] * inv_d;
+      // The three stored blocks, A and C by their upper triangles.
+      for (int r = 0; r < 3; ++r)
+        for (int cc = r; cc < 3; ++cc) {
+          I(r, cc) = I(r, cc) - U[r] * Ud[cc];
+          I(3 + r, 3 + cc) = I(3 + r, 3 + cc) - U[3 + r] * Ud[3 + cc];
+        }
+      for (int r = 0; r < 3; ++r)
+        for (int cc = 0; cc < 3; ++cc) I(r, 3 + cc) = I(r, 3 + cc) - U[r] * Ud[3 + cc];
+      for (int r = 1; r < 3; ++r)
+        for (int cc = 0; cc < r; ++cc) {
+          I(r, cc) = I(cc, r);
+          I(3 + r, 3 + cc) = I(3 + cc, 3 + r);
+        }
+      const T ud = d.u[i] * inv_d;
+      for (int r = 0; r < 3; ++r) {
+        pa[r] = pA[r] + ((I(r, 0) * c[0] + I(r, 1) * c[1] + I(r, 2) * c[2]) + (I(r, 3) * c[3] + I(r, 4) * c[4] + I(r, 5) * c[5])) +
+                U[r] * ud;
+        pa[3 + r] = pA[3 + r] +
+                    ((I(0, 3 + r) * c[0] + I(1, 3 + r) * c[1] + I(2, 3 + r) * c[2]) +
+                     (I(3 + r, 3) * c[3] + I(3 + r, 4) * c[4] + I(3 + r, 5) * c[5])) +
+                    U[3 + r] * ud;
+      }
+    } else {
+      // A fixed joint: vJ = 0, so c = 0 and pa = pA.
+      for (int r = 0; r < 6; ++r) pa[r] = pA[r];
+    }
+    if (p < 0) continue;
+    const auto& X = d.Xup[i];
+    // X^T Ia X: first the congruences by E (A1 = E^T A E, B1 = E^T B E, C1 = E^T C E) ...
+    T A1[3][3], B1[3][3], C1[3][3];
+    {
+      T PA[3][3], PB[3][3], PC[3][3];  // A E, B E, C E
+      for (int r = 0; r < 3; ++r)
+        for (int cc = 0; cc < 3; ++cc) {
+          PA[r][cc] = (I(r, 0) * X.E(0, cc) + I(r, 1) * X.E(1, cc)) + I(r, 2) * X.E(2, cc);
+          PB[r][cc] = (I(r, 3) * X.E(0, cc) + I(r, 4) * X.E(1, cc)) + I(r, 5) * X.E(2, cc);
+          PC[r][cc] = (I(3 + r, 3) * X.E(0, cc) + I(3 + r, 4) * X.E(1, cc)) + I(3 + r, 5) * X.E(2, cc);
+        }
+      for (int r = 0; r < 3; ++r) {
+        for (int cc = r; cc < 3; ++cc) {
+          A1[r][cc] = (X.E(0, r) * PA[0][cc] + X.E(1, r) * PA[1][cc]) + X.E(2, r) * PA[2][cc];
+          C1[r][cc] = (X.E(0, r) * PC[0][cc] + X.E(1, r) * PC[1][cc]) + X.E(2, r) * PC[2][cc];
+        }
+        for (int cc = 0; cc < 3; ++cc) B1[r][cc] = (X.E(0, r) * PB[0][cc] + X.E(1, r) * PB[1][cc]) + X.E(2, r) * PB[2][cc];
+      }
+      for (int r = 1; r < 3; ++r)
+        for (int cc = 0; cc < r; ++cc) {
+          A1[r][cc] = A1[cc][r];
+          C1[r][cc] = C1[cc][r];
+        }
+    }
+    // ... then the translation: B2 = B1 + R C1, A2 = A1 + R B1^T - B2 R with R = r x.
+    const T rx = X.r[0], ry = X.r[1], rz = X.r[2];
+    // (R M)[r][cc] for M given by a row accessor; (M R)[r][cc] likewise.
+    const auto RM = [&](const auto& M, int r, int cc) -> T {
+      switch (r) {
+        case 0: return rz * -M(1, cc) + ry * M(2, cc);
+        case 1: return rz * M(0, cc) - rx * M(2, cc);
+        default: return ry * -M(0, cc) + rx * M(1, cc);
+      }
+    };
+    const auto MR = [&](const auto& M, int r, int cc) -> T {
+      switch (cc) {
+        case 0: return M(r, 1) * rz - M(r, 2) * ry;
+        case 1: return M(r, 2) * rx - M(r, 0) * rz;
+        default: return M(r, 0) * ry - M(r, 1) * rx;
+      }
+    };
+    const auto c1 = [&](int r, int cc) -> const T& { return C1[r][cc]; };
+    const auto b1t = [&](int r, int cc) -> const T& { return B1[cc][r]; };
+    T B2[3][3];
+    for (int r = 0; r < 3; ++r)
+      for (int cc = 0; cc < 3; ++cc) B2[r][cc] = B1[r][cc] + RM(c1, r, cc);
+    const auto b2 = [&](int r, int cc) -> const T& { return B2[r][cc]; };
+    auto& Ip = d.IA[p];
+    for (int r = 0; r < 3; ++r) {
+      for (int cc = r; cc < 3; ++cc) {
+        Ip(r, cc) = Ip(r, cc) + ((A1[r][cc] + RM(b1t, r, cc)) - MR(b2, r, cc));
+        Ip(3 + r, 3 + cc) = Ip(3 + r, 3 + cc) + C1[r][cc];
+      }
+      for (int cc = 0; cc < 3; ++cc) Ip(r, 3 + cc) = Ip(r, 3 + cc) + B2[r][cc];
+    }
+    for (int r = 1; r < 3; ++r)
+      for (int cc = 0; cc < r; ++cc) {
+        Ip(r, cc) = Ip(cc, r);
+        Ip(3 + r, 3 + cc) = Ip(3 + cc, 3 + r);
+      }
+    // pA_parent += X^T pa = [E^T n + r x (E^T f); E^T f].
+    auto& pp = d.pA[p];
+    T fa[3];
+    for (int r = 0; r < 3; ++r) fa[r] = (X.E(0, r) * pa[3] + X.E(1, r) * pa[4]) + X.E(2, r) * pa[5];
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      pp[r] = pp[r] + (((X.E(0, r) * pa[0] + X.E(1, r) * pa[1]) + X.E(2, r) * pa[2]) + (X.r[r1] * fa[r2] - X.r[r2] * fa[r1]));
+      pp[3 + r] = pp[3 + r] + fa[r];
+    }
+  }
+  // Pass 3, base to tips: accelerations. a_0 = -g (RBDA section 5.3).
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const int k = m.dof_index[i], p = m.parent[i];
+    const auto& X = d.Xup[i];
+    auto& a = d.a[i];
+    const auto& c = d.c[i];
+    T ap[6];
+    if (p >= 0) {
+      for (int r = 0; r < 6; ++r) ap[r] = d.a[p][r];
+    } else {
+      for (int r = 0; r < 3; ++r) {
+        ap[r] = T{};
+        ap[3 + r] = splat<T>(-m.gravity_w[r]);
+      }
+    }
+    const T lw[3] = {ap[3] - (X.r[1] * ap[2] - X.r[2] * ap[1]), ap[4] - (X.r[2] * ap[0] - X.r[0] * ap[2]),
+                     ap[5] - (X.r[0] * ap[1] - X.r[1] * ap[0])};
+    for (int r = 0; r < 3; ++r) {
+      a[r] = ((X.E(r, 0) * ap[0] + X.E(r, 1) * ap[1]) + X.E(r, 2) * ap[2]) + c[r];
+      a[3 + r] = ((X.E(r, 0) * lw[0] + X.E(r, 1) * lw[1]) + X.E(r, 2) * lw[2]) + c[3 + r];
+    }
+    if (m.joint[i] == JointType::free) {
+      // A six-dof joint to the world (RBDA section 9.3): the whole tree's articulated inertia IA
+      // at the base takes the base wrench, so the joint's spatial acceleration y solves
+      // IA y = tau_s - pA - IA a, tau_s the wrench in spatial order [moment; force]. IA = L L^T.
+      const auto& I = d.IA[i];
+      const auto M = [&](int r, int cc) -> T { return (r >= 3 && cc < 3) ? I(cc, r) : (r <= cc || r >= 3 ? I(r, cc) : I(cc, r)); };
+      T rhs[6];
+      for (int r = 0; r < 6; ++r) {
+        const T ts = r < 3 ? tau[k + 3 + r] : tau[k + r - 3];
+        T Ia = M(r, 0) * a[0];
+        for (int cc = 1; cc < 6; ++cc) Ia = Ia + M(r, cc) * a[cc];
+        rhs[r] = (ts - d.pA[i][r]) - Ia;
+      }
+      T L[6][6];
+      T inv_diag[6];
+      for (int j = 0; j < 6; ++j) {
+        T s = M(j, j);
+        for (int t = 0; t < j; ++t) s = s - L[j][t] * L[j][t];
+        bad |= lanes::not_positive(s);
+        L[j][j] = lanes::sqrt(s);
+        inv_diag[j] = splat<T>(1) / L[j][j];
+        for (int r = j + 1; r < 6; ++r) {
+          T e = M(r, j);
+          for (int t = 0; t < j; ++t) e = e - L[r][t] * L[j][t];
+          L[r][j] = e * inv_diag[j];
+        }
+      }
+      T y[6];
+      for (int r = 0; r < 6; ++r) {  // L z = rhs
+        T e = rhs[r];
+        for (int t = 0; t < r; ++t) e = e - L[r][t] * y[t];
+        y[r] = e * inv_diag[r];
+      }
+      for (int r = 5; r >= 0; --r) {  // L^T y = z
+        T e = y[r];
+        for (int t = r + 1; t < 6; ++t) e = e - L[t][r] * y[t];
+        y[r] = e * inv_diag[r];
+      }
+      for (int r = 0; r < 6; ++r) a[r] = a[r] + y[r];
+      for (int cc = 0; cc < 3; ++cc) {
+        out[k + cc] = y[3 + cc];  // linear first, as the velocity coordinates
+        out[k + 3 + cc] = y[cc];
+      }
+      continue;
+    }
+    if (k < 0) continue;
+    const auto& U = d.U[i];
+    T Ua = U[0] * a[0];
+    for (int r = 1; r < 6; ++r) Ua = Ua + U[r] * a[r];
+    const T qdd = (d.u[i] - Ua) / d.d[i];
+    out[k] = qdd;
+    const int o = m.joint[i] == JointType::revolute ? 0 : 3;
+    for (int r = 0; r < 3; ++r) a[o + r] = a[o + r] + m.axis[i][r] * qdd;
+  }
+  for (int k = 0; k < m.num_dofs; ++k) bad |= lanes::not_finite(out[k]);
+  return bad;
+}
+
+/// Bit l set where lane l's inputs are unusable for aba: a non-finite coordinate, or a base
+/// quaternion off unit length by more than 1e-3.
+template <class T, int N>
+unsigned aba_input_check(const MultibodyModel<N>& m, const T* q, const T* qd, const T* tau) {
+  unsigned bad = 0;
+  for (int k = 0; k < m.num_q; ++k) bad |= lanes::not_finite(q[k]);
+  for (int k = 0; k < m.num_dofs; ++k) bad |= lanes::not_finite(qd[k]) | lanes::not_finite(tau[k]);
+  for (int i = 0; i < m.num_bodies; ++i) {
+    if (m.joint[i] != JointType::free) continue;
+    const T* qb = q + m.q_index[i] + 3;
+    const T len = lanes::sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]) - real(1);
+    bad |= lanes::failing(len, [](real e) { return std::fabs(e) <= real(1e-3); });
+  }
+  return bad;
+}
+
+}  // namespace detail
+
 /// Forward dynamics: the accelerations qdd[num_dofs] under the joint forces tau at (q, qd), with
 /// optional external forces as rnea (with a floating base, tau's first six entries are a wrench
 /// on the base, usually zero). Status::ok; non_finite_input (qdd untouched) for a non-finite
 /// input, a base quaternion off unit length by more than 1e-3, or a singular articulated inertia
-/// (a joint with no inertia behind it).
+/// (a joint with no inertia behind it). Leaves Xup, S, v, c, a at (q, qd) in d.
 ///
 /// implicit_damping_dt h > 0 solves (M + h D) qdd = tau - bias - D qd instead, D the joints'
 /// viscous damping: the accelerations of a step of length h with the damping taken at the end of
@@ -363,70 +783,51 @@ void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* 
 template <int N>
 [[nodiscard]] Status aba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const real* qd, const real* tau,
                          real* qdd, const Vec6* f_ext = nullptr, real implicit_damping_dt = 0) {
-  const int n = m.num_dofs;
-  if (!all_finite(q, m.num_q) || !all_finite(qd, n) || !all_finite(tau, n)) return Status::non_finite_input;
-  if (!detail::base_quaternion_ok(m, q)) return Status::non_finite_input;
-  detail::update_kinematics(m, d, q);
-  // Pass 1, base to tips: velocities, velocity-product accelerations, bias forces.
-  for (int i = 0; i < m.num_bodies; ++i) {
-    const int k = m.dof_index[i], p = m.parent[i];
-    const Vec6 vJ = k >= 0 ? detail::joint_motion(m, d, i, qd + k) : Vec6::Zero();
-    d.v[i] = (p >= 0 ? apply_motion(d.Xup[i], d.v[p]) : Vec6::Zero()) + vJ;
-    d.c[i] = cross_motion(d.v[i], vJ);
-    d.IA[i] = inertia_matrix(m.body[i]);
-    d.pA[i] = cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
-    if (f_ext != nullptr) d.pA[i] -= f_ext[i];
-  }
-  // Pass 2, tips to base: articulated inertias and bias forces.
-  for (int i = m.num_bodies - 1; i >= 0; --i) {
-    const int k = m.dof_index[i], p = m.parent[i];
-    if (m.joint[i] == JointType::free) continue;  // the root: solved in pass 3
-    Mat6 Ia = d.IA[i];
-    Vec6 pa = d.pA[i];
-    if (k >= 0) {
-      d.U[i] = d.IA[i] * d.S[i];
-      d.d[i] = d.S[i].dot(d.U[i]) + m.armature[i] + implicit_damping_dt * m.damping[i];
-      if (!(d.d[i] > 0)) return Status::non_finite_input;
-      d.u[i] = tau[k] - m.damping[i] * qd[k] - d.S[i].dot(d.pA[i]);
-      Ia -= d.U[i] * d.U[i].transpose() / d.d[i];
-      pa += Ia * d.c[i] + d.U[i] * (d.u[i] / d.d[i]);
-    } else {
-      pa += Ia * d.c[i];
-    }
-    if (p >= 0) {
-      d.IA[p] += detail::to_parent(d.Xup[i], Ia);
-      d.pA[p] += apply_force_transpose(d.Xup[i], pa);
-    }
-  }
-  // Pass 3, base to tips: accelerations.
-  const Vec6 a0 = detail::base_acceleration(m);
+  if (detail::aba_input_check(m, q, qd, tau) != 0) return Status::non_finite_input;
   real out[max_dofs<N>()];
-  for (int i = 0; i < m.num_bodies; ++i) {
-    const int k = m.dof_index[i], p = m.parent[i];
-    d.a[i] = apply_motion(d.Xup[i], p >= 0 ? d.a[p] : a0) + d.c[i];
-    if (m.joint[i] == JointType::free) {
-      // A six-dof joint to the world (RBDA section 9.3): the whole tree's articulated inertia
-      // IA at the base takes the base wrench, so the joint's spatial acceleration y solves
-      // IA (a + y) = tau_s - pA, with tau_s the wrench in spatial order [moment; force].
-      const Vec6 tau_s = spatial(Vec3(tau[k + 3], tau[k + 4], tau[k + 5]), Vec3(tau[k], tau[k + 1], tau[k + 2]));
-      const Eigen::LLT<Mat6> llt(d.IA[i]);
-      if (llt.info() != Eigen::Success) return Status::non_finite_input;
-      const Vec6 y = llt.solve(Vec6(tau_s - d.pA[i] - d.IA[i] * d.a[i]));
-      d.a[i] += y;
-      for (int c = 0; c < 3; ++c) {
-        out[k + c] = y[3 + c];  // linear first, as the velocity coordinates
-        out[k + 3 + c] = y[c];
-      }
-      continue;
-    }
-    if (k < 0) continue;
-    out[k] = (d.u[i] - d.U[i].dot(d.a[i])) / d.d[i];
-    d.a[i] += d.S[i] * out[k];
-  }
-  if (!all_finite(out, n)) return Status::non_finite_input;
-  for (int k = 0; k < n; ++k) qdd[k] = out[k];
+  if (detail::aba_kernel<real>(m, d, q, qd, tau, out, f_ext, implicit_damping_dt) != 0) return Status::non_finite_input;
+  for (int i = 0; i < m.num_bodies; ++i) d.S[i] = detail::motion_subspace(m, i);
+  for (int k = 0; k < m.num_dofs; ++k) qdd[k] = out[k];
   return Status::ok;
 }
+
+/// The working storage of aba_batch for L robots of one model (per body what MultibodyData holds
+/// for aba, in lanes). About 80 x L reals per body: make it static or a member, not a local of a
+/// small MCU stack.
+template <int N, int L = 4>
+struct MultibodyBatchData {
+  using T = Lanes<L>;
+  detail::LaneTransform<T> Xup[N];
+  detail::LaneVec6<T> v[N], a[N], c[N], pA[N], U[N];
+  detail::LaneMat<T, 6> IA[N];
+  T d[N], u[N];
+};
+
+/// aba for L robots of one model at once, robot l in lane l of every value: q[num_q], qd and
+/// tau[num_dofs], qdd[num_dofs] (q[k][l] is robot l's coordinate k), f_ext[num_bodies] or
+/// nullptr. Each lane's accelerations are the bits aba gives that robot alone (the same
+/// operations, lane by lane; tests/dynamics/test_multibody.cpp). Returns the lanes (bit l) that
+/// aba would refuse with non_finite_input; their qdd lanes are left as they were.
+template <int N, int L>
+[[nodiscard]] unsigned aba_batch(const MultibodyModel<N>& m, MultibodyBatchData<N, L>& d, const Lanes<L>* q,
+                                 const Lanes<L>* qd, const Lanes<L>* tau, Lanes<L>* qdd,
+                                 const detail::LaneVec6<Lanes<L>>* f_ext = nullptr, real implicit_damping_dt = 0) {
+  using T = Lanes<L>;
+  const unsigned refused = detail::aba_input_check(m, q, qd, tau);
+  T out[max_dofs<N>()];
+  const unsigned bad = refused | detail::aba_kernel<T>(m, d, q, qd, tau, out, f_ext, implicit_damping_dt);
+  for (int k = 0; k < m.num_dofs; ++k) {
+    if (bad == 0) {
+      qdd[k] = out[k];
+      continue;
+    }
+    for (int l = 0; l < L; ++l)
+      if (((bad >> l) & 1u) == 0) qdd[k][l] = out[k][l];
+  }
+  return bad;
+}
+
+#pragma GCC diagnostic pop
 
 namespace detail {
 /// forward_kinematics over Xup already at q.
