@@ -1,4 +1,4 @@
-"""The trained Go2 walking policy (bench/results/python/go2_flat_rsl_rl.pt) as core code, with
+"""The trained Go2 walking policy (bench/results/python/go2_flat_rsl_rl_push4.pt) as core code, with
 observations recorded from it walking (issue 13, "sim to MCU"):
 
   - platform/firmware/go2_flat_policy.hpp: the 48-128-64-12 ELU actor as `kGo2FlatPolicy`
@@ -26,7 +26,7 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("--checkpoint", default=os.path.join(ROOT, "bench", "results", "python", "go2_flat_rsl_rl.pt"))
+    p.add_argument("--checkpoint", default=os.path.join(ROOT, "bench", "results", "python", "go2_flat_rsl_rl_push4.pt"))
     p.add_argument("--cases", type=int, default=64)
     args = p.parse_args()
     sd = torch.load(args.checkpoint, map_location="cpu", weights_only=False)["actor_state_dict"]

@@ -324,6 +324,17 @@ class Learner:
             self.venv.save(path + ".vecnormalize.pkl")
 
 
+def _task_keys(flag: str, text: str) -> dict:
+    """A --task-set style argument: a JSON object of scenario `task:` keys, else a clear exit."""
+    try:
+        keys = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise SystemExit(f"{flag}: expected a JSON object of task section keys, got {text!r} ({e})")
+    if not isinstance(keys, dict):
+        raise SystemExit(f"{flag}: expected a JSON object of task section keys, got {text!r}")
+    return keys
+
+
 def plot(rows: list[dict], path: str, title: str, target_success: float | None = None) -> None:
     """The learning curves (kestrel.plots.plot_learning_curves: labelled axes with units, legends,
     the --target-success line)."""
@@ -493,6 +504,10 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--task-set", default=None,
                    help="scenario `task:` keys as a JSON object, e.g. '{\"navigation\": {\"action_space\": \"velocity\"}}' "
                         "(docs/scenario_reference.md; checked like a scenario's)")
+    p.add_argument("--train-task-set", default=None,
+                   help="scenario `task:` keys as a JSON object for the training environments only, on top of --task-set: "
+                        "training-side randomisation the evaluation must not see, e.g. more frequent pushes "
+                        "'{\"locomotion\": {\"push_interval_s\": 4}}'")
     p.add_argument("--action-scale", default="auto",
                    help="normalised actions in [-1, 1] times these (comma list, one or one per action), 'none' for the "
                         "task's own +-10 actions; auto: " + ", ".join(f"{k} {v}" for k, v in _AUTO_ACTION_SCALE.items()))
@@ -544,15 +559,15 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     if vframe:
         overrides["vehicle_frame_obs"] = True
     if args.task_set:
-        try:
-            task_set = json.loads(args.task_set)
-        except json.JSONDecodeError as e:
-            raise SystemExit(f"--task-set: expected a JSON object of task section keys, got {args.task_set!r} ({e})")
-        if not isinstance(task_set, dict):
-            raise SystemExit(f"--task-set: expected a JSON object of task section keys, got {args.task_set!r}")
-        overrides["task"] = task_set
+        overrides["task"] = _task_keys("--task-set", args.task_set)
     if args.episode_len:
         overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
+    train_overrides = overrides
+    if args.train_task_set:
+        from . import _merge
+
+        train_set = _task_keys("--train-task-set", args.train_task_set)
+        train_overrides = {**overrides, "task": _merge(dict(overrides.get("task", {})), train_set)}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
     if args.address is not None or args.rollout_workers is not None:
         # Environments on a Ray cluster, in slices keyed by global index: the same batches as one
@@ -563,9 +578,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         if workers < 1:
             raise SystemExit(f"--rollout-workers: expected an integer >= 1, got {workers}")
         env = RayVectorEnv(args.task, num_envs=args.envs, seed=args.seed, workers=workers, threads=args.threads or 1,
-                           address=None if args.address in (None, "local") else args.address, **overrides)
+                           address=None if args.address in (None, "local") else args.address, **train_overrides)
     else:
-        env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **overrides)
+        env = make_vec(args.task, num_envs=args.envs, seed=args.seed, threads=args.threads, **train_overrides)
     eval_overrides = dict(overrides)
     if env.task.name == "navigation_task" and args.eval_level != "train":
         # Evaluated at one level, held (no curriculum steps): Aerial Gym reports its navigation
@@ -698,7 +713,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
-               "final_eval": final_eval, "hidden": list(args.hidden),
+               "final_eval": final_eval, "hidden": list(args.hidden), "task_set": args.task_set,
+               "train_task_set": args.train_task_set, "resume": args.resume,
+               "train_episodes": int(env.task.infos.get("episodes", 0)),
                "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count(),
                "view": view_summary}
     with open(os.path.join(args.out, "summary.json"), "w") as f:

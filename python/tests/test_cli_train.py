@@ -111,3 +111,33 @@ def test_training_progress_bar_on_a_pseudo_terminal(tmp_path):
             assert "env-step" not in err, err
         else:
             assert "2.56k/2.56k" in err and "env-step" in err, err
+
+
+def test_train_task_set_reaches_the_training_envs_only(tmp_path):
+    # --train-task-set: task keys for the training environments alone (training-side randomisation,
+    # e.g. Go2's pushes every 4 s, that the evaluation must not see). Here the training episodes are
+    # cut to 20 env-steps while the evaluation keeps --episode-len's 100: its episodes (no crash at
+    # the start of training, which hovers under the Lee controller) run past 20 steps.
+    from kestrel.train import main
+
+    s = main([TASK, "--envs", "16", "--seed", "0", "--steps", "2560", "--eval-every", "2560", "--eval-episodes", "16",
+              "--episode-len", "100", "--threads", "1", "--out", str(tmp_path), "--quiet", "--export", "0",
+              "--tensorboard", "0", "--train-task-set", '{"episode_len_env_steps": 20}'])
+    assert s["train_task_set"] == '{"episode_len_env_steps": 20}'
+    assert s["initial"]["mean_length"] > 20 and s["final"]["mean_length"] > 20, (s["initial"], s["final"])
+    with open(tmp_path / "summary.json") as f:
+        import json
+
+        assert json.load(f)["train_task_set"] == s["train_task_set"]
+    # The training envs' episodes were the short ones: 2560 env-steps over 16 envs end >= 16 x 7 of them.
+    assert s["train_episodes"] >= 16 * 7, s["train_episodes"]
+
+
+def test_train_task_set_refuses_what_is_not_a_json_object(tmp_path):
+    import pytest
+
+    from kestrel.train import main
+
+    for bad in ("{nope", "[1, 2]"):
+        with pytest.raises(SystemExit, match="--train-task-set: expected a JSON object"):
+            main([TASK, "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--train-task-set", bad])

@@ -331,7 +331,7 @@ KTEST(PolicyMlp, SameBitsOnEveryTarget) {
 
 KTEST(PolicyMlp, TrainedGo2PolicySameBitsOnEveryTarget) {
   // legged_gym's locomotion policy for Go2 (48 observations, 128-64 ELU, 12 joint actions),
-  // trained in the simulator (bench/results/python/go2_flat_rsl_rl.*), on 64 observations of it
+  // trained in the simulator (bench/results/python/go2_flat_rsl_rl_push4.*), on 64 observations of it
   // walking: the compiled network must give, on the host and on every emulated MCU, the bits the
   // host's core gave when they were recorded.
   namespace g = kestrel::policy::generated;
