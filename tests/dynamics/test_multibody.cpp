@@ -57,11 +57,24 @@ void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream, boo
     m.body[i].inertia_com = real(0.5) * (m.body[i].inertia_com + m.body[i].inertia_com.transpose());
     m.armature[i] = stream % 2 == 0 ? r.uniform(0, 0.05_r) : 0;  // half the trees with rotor inertia and damping
     m.damping[i] = stream % 2 == 0 ? r.uniform(0, 0.5_r) : 0;
+    // In a third of the trees, every other revolute joint turns about +x, +y or +z of an unrotated
+    // joint frame, as in most robot files: aba's elementary-axis path (finish_model finds them).
+    if (stream % 3 == 1 && i % 2 == 0 && m.joint[i] == dy::JointType::revolute) {
+      m.axis[i] = Vec3::Unit(static_cast<int>(r.uniform(0, 2.999_r)));
+      m.X_tree[i].E = Mat3::Identity();
+    }
   }
   if (floating) {
     m.joint[0] = dy::JointType::free;
     m.armature[0] = m.damping[0] = 0;
   }
+}
+
+template <int N>
+int elementary_joints(const dy::MultibodyModel<N>& m) {
+  int n = 0;
+  for (int i = 0; i < m.num_bodies; ++i) n += m.elementary_axis[i] >= 0 ? 1 : 0;
+  return n;
 }
 
 // A random configuration (unit base quaternion for a floating tree) and velocities.
@@ -190,17 +203,21 @@ KTEST(Multibody, PendulumMatchesItsClosedForm) {
   }
 }
 
-// Random fixed-base trees (half with armature and damping): check_consistency, Jacobians included.
+// Random fixed-base trees (half with armature and damping, a third with elementary-axis joints,
+// whose ABA path RNEA and CRBA do not share): check_consistency, Jacobians included.
 KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
+  int elementary = 0;
   for (std::uint32_t tree = 0; tree < 20; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
     random_tree(m, 3 + static_cast<int>(tree % 6), tree);
     KASSERT_TRUE(dy::finish_model(m) == Status::ok);
     KEXPECT_EQ(m.num_q, m.num_dofs);
+    elementary += elementary_joints(m);
     RngStream r(7, tree, 2);
     check_consistency(m, r);
   }
+  KEXPECT_GT(elementary, 5);
 }
 
 KTEST(Multibody, RefusesBadModelsAndInputs) {
@@ -304,6 +321,7 @@ KTEST(Multibody, FreeBodyFollowsNewtonEuler) {
 // (6 + n)-square mass matrix is symmetric positive definite with H qdd + bias = tau and the
 // kinetic energy 1/2 qd^T H qd, and point Jacobians give the point velocities.
 KTEST(Multibody, FloatingBaseTreesAreConsistent) {
+  int elementary = 0;
   for (std::uint32_t tree = 0; tree < 12; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
@@ -311,9 +329,11 @@ KTEST(Multibody, FloatingBaseTreesAreConsistent) {
     KASSERT_TRUE(dy::finish_model(m) == Status::ok);
     const int n = m.num_dofs;
     KEXPECT_EQ(m.num_q, n + 1);
+    elementary += elementary_joints(m);
     RngStream r(11, tree, 4);
     check_consistency(m, r);
   }
+  KEXPECT_GT(elementary, 2);
 }
 
 // step_semi_implicit at legged_gym's dt = 0.005 s: implicit damping keeps a stiffly damped joint
@@ -432,13 +452,14 @@ dy::MultibodyBatchData<kMax, 4> g_batch;
 KTEST(Multibody, BatchedAbaIsBitIdenticalToTheScalarOne) {
   constexpr int L = 4, kDofs = dy::max_dofs<kMax>();
   using T = dy::Lanes<L>;
-  int compared = 0, refused_seen = 0;
+  int compared = 0, refused_seen = 0, elementary = 0;
   for (std::uint32_t tree = 0; tree < 24; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
     const bool floating = tree % 2 == 1;
     random_tree(m, (floating ? 2 : 3) + static_cast<int>(tree % 6), tree, floating);
     KASSERT_TRUE(dy::finish_model(m) == Status::ok);
+    elementary += elementary_joints(m);
     RngStream r(11, tree, 3);
     real q[L][kDofs + 1] = {}, qd[L][kDofs] = {}, tau[L][kDofs] = {};
     T qb[kDofs + 1] = {}, qdb[kDofs] = {}, taub[kDofs] = {}, qddb[kDofs] = {};
@@ -493,4 +514,5 @@ KTEST(Multibody, BatchedAbaIsBitIdenticalToTheScalarOne) {
   }
   KEXPECT_GT(compared, 500);
   KEXPECT_GT(refused_seen, 8);
+  KEXPECT_GT(elementary, 5);
 }

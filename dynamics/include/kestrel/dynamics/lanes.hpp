@@ -4,7 +4,7 @@
 // IEEE operations, so every lane computes with the same operations in the same order as the scalar
 // code and gets the same bits (-ffp-contract=off: no fused multiply-add on either side). Where the
 // target has SIMD registers of that width (SSE2: 4 floats) the compiler uses them; on an MCU it
-// lowers them to scalar code. sqrt, sin and cos call the scalar function once per lane: the
+// lowers them to scalar code. sqrt and sin_cos call the scalar function once per lane: the
 // function the scalar path calls, hence the same bits.
 //
 // Core rules: no heap, no exceptions; float or double (kernel/types.hpp's real).
@@ -13,6 +13,7 @@
 #include <cmath>
 #include <type_traits>
 
+#include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/types.hpp"
 
 // Lanes wider than the target's registers (4 doubles without AVX) are passed in memory: GCC notes
@@ -83,13 +84,22 @@ template <class T>
 inline T sqrt(const T& x) {
   return map(x, [](real v) { return std::sqrt(v); });
 }
+/// Sine and cosine of each lane by the kernel's sin_cos (kernel/math.hpp: in float its own
+/// polynomial, the same bits on the host and every MCU and no libm; in double the library's).
 template <class T>
-inline T cos(const T& x) {
-  return map(x, [](real v) { return std::cos(v); });
-}
-template <class T>
-inline T sin(const T& x) {
-  return map(x, [](real v) { return std::sin(v); });
+inline void sin_cos(const T& x, T& s, T& c) {
+  if constexpr (std::is_same_v<T, real>) {
+    kestrel::sin_cos(x, s, c);
+  } else {
+    s = x;
+    c = x;
+    for (int l = 0; l < count<T>(); ++l) {
+      real sl = 0, cl = 0;
+      kestrel::sin_cos(x[l], sl, cl);
+      s[l] = sl;
+      c[l] = cl;
+    }
+  }
 }
 
 /// Bit l set where lane l fails `pred` (a predicate on one real).

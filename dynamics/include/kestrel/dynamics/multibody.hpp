@@ -29,6 +29,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include <Eigen/Cholesky>
 
@@ -69,6 +70,11 @@ struct MultibodyModel {
   real q_max[kMaxBodies] = {};
   real friction_loss[kMaxBodies] = {};
   real effort_limit[kMaxBodies] = {};
+  // Set by finish_model: k (0, 1, 2) where joint i is revolute about +x, +y or +z of a joint frame
+  // with no rotation in its parent (X_tree[i].E = 1, as in most robot files); -1 otherwise. aba
+  // then takes X_up's rotation as the elementary rotation about axis k that it is (a third of the
+  // multiplications of a general rotation's). Call finish_model again after changing axis or X_tree.
+  std::int8_t elementary_axis[kMaxBodies] = {};
   Vec3 gravity_w = Vec3(0, 0, -9.81_r);
 };
 
@@ -113,6 +119,7 @@ template <int N>
     const Mat3& I = b.inertia_com;
     if (!(I(0, 0) > 0 && I(1, 1) > 0 && I(2, 2) > 0) || !(I - I.transpose()).isZero(real(1e-6) * I.trace()))
       return Status::invalid_argument;
+    m.elementary_axis[i] = -1;
     if (m.joint[i] == JointType::fixed) {
       m.dof_index[i] = m.q_index[i] = -1;
       continue;
@@ -134,6 +141,10 @@ template <int N>
       return Status::invalid_argument;
     m.dof_index[i] = dof++;
     m.q_index[i] = nq++;
+    m.elementary_axis[i] = -1;
+    if (m.joint[i] == JointType::revolute && m.X_tree[i].E == Mat3::Identity())
+      for (int k = 0; k < 3; ++k)
+        if (m.axis[i] == Vec3::Unit(k)) m.elementary_axis[i] = static_cast<std::int8_t>(k);
   }
   if (dof > max_dofs<N>()) return Status::invalid_argument;
   m.num_dofs = dof;
@@ -393,6 +404,17 @@ struct LaneTransform {
   LaneVec3<T> r;
 };
 
+/// f(std::integral_constant<int, k>) for k = 0, 1, 2: code for an elementary axis with its indices
+/// known at compile time (runtime indices would keep the small arrays in memory).
+template <class F>
+inline void with_axis(int k, F&& f) {
+  switch (k) {
+    case 0: f(std::integral_constant<int, 0>{}); return;
+    case 1: f(std::integral_constant<int, 1>{}); return;
+    default: f(std::integral_constant<int, 2>{}); return;
+  }
+}
+
 /// Forward dynamics over any lane type T (real: one robot; Lanes<L>: L robots of one model),
 /// Featherstone's articulated-body algorithm (RBDA table 7.1) with every spatial product written
 /// out in 3 x 3 blocks:
@@ -403,7 +425,11 @@ struct LaneTransform {
 ///  - a revolute (prismatic) joint's U = I S takes the three angular (linear) columns of I
 ///    against the axis;
 ///  - the free joint's 6 x 6 solve is a Cholesky factorisation written out (the same operations
-///    in every lane, where Eigen's LLT would differ between a scalar and a vector type).
+///    in every lane, where Eigen's LLT would differ between a scalar and a vector type);
+///  - a revolute joint about +x, +y or +z of an unrotated joint frame (elementary_axis) takes its
+///    rotation as the elementary one it is: a 2 x 2 block in each product;
+///  - a joint's sine and cosine come from the kernel's sin_cos: in float the same bits on the host
+///    and the MCUs (libm's sinf and cosf differ between glibc and newlib).
 /// D is MultibodyData (T = real) or MultibodyBatchData (lanes); F the external-force vectors
 /// (nullptr: none). q, qd, tau: the coordinates, lane values; out[num_dofs] receives qdd. The
 /// inputs are checked by the callers. Returns the lanes (bit l) whose articulated inertia was
@@ -413,6 +439,34 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
                     real implicit_damping_dt) {
   using lanes::splat;
   unsigned bad = 0;
+  // out = E w and out = E^T f for body i's Xup rotation E: general, or the elementary rotation
+  // about axis k = elementary_axis[i] (E's c = E(i1, i1), s = E(i1, i2); see finish_model).
+  const auto rotate = [](const auto& E, int k, const T* w, T* res) {
+    if (k >= 0) {
+      with_axis(k, [&](auto K) {
+        constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+        const T c = E(i1, i1), s = E(i1, i2);
+        res[e] = w[e];
+        res[i1] = c * w[i1] + s * w[i2];
+        res[i2] = c * w[i2] - s * w[i1];
+      });
+      return;
+    }
+    for (int r = 0; r < 3; ++r) res[r] = (E(r, 0) * w[0] + E(r, 1) * w[1]) + E(r, 2) * w[2];
+  };
+  const auto rotate_t = [](const auto& E, int k, const T* f, T* res) {
+    if (k >= 0) {
+      with_axis(k, [&](auto K) {
+        constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+        const T c = E(i1, i1), s = E(i1, i2);
+        res[e] = f[e];
+        res[i1] = c * f[i1] - s * f[i2];
+        res[i2] = s * f[i1] + c * f[i2];
+      });
+      return;
+    }
+    for (int r = 0; r < 3; ++r) res[r] = (E(0, r) * f[0] + E(1, r) * f[1]) + E(2, r) * f[2];
+  };
   // Pass 1, base to tips: Xup = X_J(q) X_tree, velocities, velocity-product accelerations c,
   // the bodies' own inertias and bias forces.
   for (int i = 0; i < m.num_bodies; ++i) {
@@ -426,7 +480,28 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     switch (m.joint[i]) {
       case JointType::revolute: {
         // E = R(q)^T E_tree, R the rotation by q about the axis (Rodrigues); r = r_tree.
-        const T co = lanes::cos(q[kq]), si = lanes::sin(q[kq]), t = splat<T>(1) - co;
+        T co, si;
+        lanes::sin_cos(q[kq], si, co);
+        const int ek = m.elementary_axis[i];
+        if (ek >= 0) {
+          // About +x, +y or +z with E_tree = 1: E = R^T has c, s at (i1, i1), (i1, i2), (i2, i1), (i2, i2).
+          with_axis(ek, [&](auto K) {
+            constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+            for (int r = 0; r < 3; ++r) {
+              for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = T{};
+              X.r[r] = splat<T>(Xt.r[r]);
+            }
+            X.E(e, e) = splat<T>(1);
+            X.E(i1, i1) = co;
+            X.E(i1, i2) = si;
+            X.E(i2, i1) = -si;
+            X.E(i2, i2) = co;
+            for (int a = 0; a < 6; ++a) vJ[a] = T{};
+            vJ[e] = qd[k];
+          });
+          break;
+        }
+        const T t = splat<T>(1) - co;
         const real xx = ax[0] * ax[0], yy = ax[1] * ax[1], zz = ax[2] * ax[2];
         const real xy = ax[0] * ax[1], xz = ax[0] * ax[2], yz = ax[1] * ax[2];
         const T sx = si * ax[0], sy = si * ax[1], sz = si * ax[2];
@@ -500,19 +575,37 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     // v = Xup v_parent + vJ (apply_motion: [E w; E (v - r x w)]); c = v x vJ (crm).
     if (p >= 0) {
       const auto& vp = d.v[p];
+      const T wp[3] = {vp[0], vp[1], vp[2]};
       const T lw[3] = {vp[3] - (X.r[1] * vp[2] - X.r[2] * vp[1]), vp[4] - (X.r[2] * vp[0] - X.r[0] * vp[2]),
                        vp[5] - (X.r[0] * vp[1] - X.r[1] * vp[0])};
+      T ew[3], el[3];
+      rotate(X.E, m.elementary_axis[i], wp, ew);
+      rotate(X.E, m.elementary_axis[i], lw, el);
       for (int r = 0; r < 3; ++r) {
-        v[r] = (X.E(r, 0) * vp[0] + X.E(r, 1) * vp[1] + X.E(r, 2) * vp[2]) + vJ[r];
-        v[3 + r] = (X.E(r, 0) * lw[0] + X.E(r, 1) * lw[1] + X.E(r, 2) * lw[2]) + vJ[3 + r];
+        v[r] = ew[r] + vJ[r];
+        v[3 + r] = el[r] + vJ[3 + r];
       }
     } else {
       for (int r = 0; r < 6; ++r) v[r] = vJ[r];
     }
-    for (int r = 0; r < 3; ++r) {
-      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
-      c[r] = v[r1] * vJ[r2] - v[r2] * vJ[r1];
-      c[3 + r] = (v[r1] * vJ[3 + r2] - v[r2] * vJ[3 + r1]) + (v[3 + r1] * vJ[r2] - v[3 + r2] * vJ[r1]);
+    if (m.elementary_axis[i] >= 0) {
+      // vJ = [qd e_k; 0]: c = [w x e_k; v x e_k] qd, whose k components are zero.
+      with_axis(m.elementary_axis[i], [&](auto K) {
+        constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+        const T w = vJ[e];
+        c[e] = T{};
+        c[i1] = v[i2] * w;
+        c[i2] = -(v[i1] * w);
+        c[3 + e] = T{};
+        c[3 + i1] = v[3 + i2] * w;
+        c[3 + i2] = -(v[3 + i1] * w);
+      });
+    } else {
+      for (int r = 0; r < 3; ++r) {
+        const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+        c[r] = v[r1] * vJ[r2] - v[r2] * vJ[r1];
+        c[3 + r] = (v[r1] * vJ[3 + r2] - v[r2] * vJ[3 + r1]) + (v[3 + r1] * vJ[r2] - v[3 + r2] * vJ[r1]);
+      }
     }
     // The body's inertia at its origin (RBDA eq. 2.63) as blocks: A = Ic + m (|c|^2 1 - c c^T),
     // B = m c x, C = m 1.
@@ -564,15 +657,31 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
       const Vec3& ax = m.axis[i];
       const int o = m.joint[i] == JointType::revolute ? 0 : 3;  // S's nonzero half
       auto& U = d.U[i];
-      for (int r = 0; r < 6; ++r) {
-        // Row r of I against the axis; I's lower-left block is B^T (never stored).
-        const auto e = [&](int cc) -> T { return (r < 3 || o == 3) ? I(r, o + cc) : I(o + cc, r); };
-        U[r] = (e(0) * ax[0] + e(1) * ax[1]) + e(2) * ax[2];
+      const int ek = m.elementary_axis[i];
+      const real rotor = m.armature[i] + implicit_damping_dt * m.damping[i];
+      T dd;
+      if (ek >= 0) {
+        // S = [e_k; 0]: U is I's column k (its lower half from the stored B: B^T's column k is B's row k).
+        with_axis(ek, [&](auto K) {
+          constexpr int e = decltype(K)::value;
+          for (int r = 0; r < 3; ++r) {
+            U[r] = I(r, e);
+            U[3 + r] = I(e, 3 + r);
+          }
+          dd = U[e] + rotor;
+          d.u[i] = (tau[k] - m.damping[i] * qd[k]) - pA[e];
+        });
+      } else {
+        for (int r = 0; r < 6; ++r) {
+          // Row r of I against the axis; I's lower-left block is B^T (never stored).
+          const auto e = [&](int cc) -> T { return (r < 3 || o == 3) ? I(r, o + cc) : I(o + cc, r); };
+          U[r] = (e(0) * ax[0] + e(1) * ax[1]) + e(2) * ax[2];
+        }
+        dd = (ax[0] * U[o] + ax[1] * U[o + 1]) + ax[2] * U[o + 2] + rotor;
+        d.u[i] = (tau[k] - m.damping[i] * qd[k]) - ((ax[0] * pA[o] + ax[1] * pA[o + 1]) + ax[2] * pA[o + 2]);
       }
-      const T dd = (ax[0] * U[o] + ax[1] * U[o + 1]) + ax[2] * U[o + 2] + (m.armature[i] + implicit_damping_dt * m.damping[i]);
       bad |= lanes::not_positive(dd);
       d.d[i] = dd;
-      d.u[i] = (tau[k] - m.damping[i] * qd[k]) - ((ax[0] * pA[o] + ax[1] * pA[o + 1]) + ax[2] * pA[o + 2]);
       const T inv_d = splat<T>(1) / dd;
       T Ud[6];
       for (int r = 0; r < 6; ++r) Ud[r] = U[r] * inv_d;
@@ -606,7 +715,31 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     const auto& X = d.Xup[i];
     // X^T Ia X: first the congruences by E (A1 = E^T A E, B1 = E^T B E, C1 = E^T C E) ...
     T A1[3][3], B1[3][3], C1[3][3];
-    {
+    const int ek = m.elementary_axis[i];
+    if (ek >= 0) {
+      // E the elementary rotation about axis k: M E mixes columns i1, i2 of M and E^T (M E) its
+      // rows i1, i2; the rest passes through.
+      with_axis(ek, [&](auto K) {
+        constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+        const T co = X.E(i1, i1), si = X.E(i1, i2);
+        const auto congruence = [&](int r0, int c0, T res[3][3]) {
+          T Q[3][3];
+          for (int r = 0; r < 3; ++r) {
+            Q[r][e] = I(r0 + r, c0 + e);
+            Q[r][i1] = I(r0 + r, c0 + i1) * co - I(r0 + r, c0 + i2) * si;
+            Q[r][i2] = I(r0 + r, c0 + i1) * si + I(r0 + r, c0 + i2) * co;
+          }
+          for (int cc = 0; cc < 3; ++cc) {
+            res[e][cc] = Q[e][cc];
+            res[i1][cc] = co * Q[i1][cc] - si * Q[i2][cc];
+            res[i2][cc] = si * Q[i1][cc] + co * Q[i2][cc];
+          }
+        };
+        congruence(0, 0, A1);
+        congruence(0, 3, B1);
+        congruence(3, 3, C1);
+      });
+    } else {
       T PA[3][3], PB[3][3], PC[3][3];  // A E, B E, C E
       for (int r = 0; r < 3; ++r)
         for (int cc = 0; cc < 3; ++cc) {
@@ -665,11 +798,12 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
       }
     // pA_parent += X^T pa = [E^T n + r x (E^T f); E^T f].
     auto& pp = d.pA[p];
-    T fa[3];
-    for (int r = 0; r < 3; ++r) fa[r] = (X.E(0, r) * pa[3] + X.E(1, r) * pa[4]) + X.E(2, r) * pa[5];
+    T fa[3], na[3];
+    rotate_t(X.E, ek, pa + 3, fa);
+    rotate_t(X.E, ek, pa, na);
     for (int r = 0; r < 3; ++r) {
       const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
-      pp[r] = pp[r] + (((X.E(0, r) * pa[0] + X.E(1, r) * pa[1]) + X.E(2, r) * pa[2]) + (X.r[r1] * fa[r2] - X.r[r2] * fa[r1]));
+      pp[r] = pp[r] + (na[r] + (X.r[r1] * fa[r2] - X.r[r2] * fa[r1]));
       pp[3 + r] = pp[3 + r] + fa[r];
     }
   }
@@ -690,9 +824,13 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     }
     const T lw[3] = {ap[3] - (X.r[1] * ap[2] - X.r[2] * ap[1]), ap[4] - (X.r[2] * ap[0] - X.r[0] * ap[2]),
                      ap[5] - (X.r[0] * ap[1] - X.r[1] * ap[0])};
+    T ew[3], el[3];
+    const int ek = m.elementary_axis[i];
+    rotate(X.E, ek, ap, ew);
+    rotate(X.E, ek, lw, el);
     for (int r = 0; r < 3; ++r) {
-      a[r] = ((X.E(r, 0) * ap[0] + X.E(r, 1) * ap[1]) + X.E(r, 2) * ap[2]) + c[r];
-      a[3 + r] = ((X.E(r, 0) * lw[0] + X.E(r, 1) * lw[1]) + X.E(r, 2) * lw[2]) + c[3 + r];
+      a[r] = ew[r] + c[r];
+      a[3 + r] = el[r] + c[3 + r];
     }
     if (m.joint[i] == JointType::free) {
       // A six-dof joint to the world (RBDA section 9.3): the whole tree's articulated inertia IA
@@ -745,6 +883,10 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     for (int r = 1; r < 6; ++r) Ua = Ua + U[r] * a[r];
     const T qdd = (d.u[i] - Ua) / d.d[i];
     out[k] = qdd;
+    if (ek >= 0) {
+      a[ek] = a[ek] + qdd;
+      continue;
+    }
     const int o = m.joint[i] == JointType::revolute ? 0 : 3;
     for (int r = 0; r < 3; ++r) a[o + r] = a[o + r] + m.axis[i][r] * qdd;
   }
