@@ -141,7 +141,6 @@ template <int N>
       return Status::invalid_argument;
     m.dof_index[i] = dof++;
     m.q_index[i] = nq++;
-    m.elementary_axis[i] = -1;
     if (m.joint[i] == JointType::revolute && m.X_tree[i].E == Mat3::Identity())
       for (int k = 0; k < 3; ++k)
         if (m.axis[i] == Vec3::Unit(k)) m.elementary_axis[i] = static_cast<std::int8_t>(k);
@@ -159,6 +158,17 @@ inline int joint_dofs(const MultibodyModel<N>& m, int i) {
 }
 
 namespace detail {
+/// The motion subspace S of a revolute or prismatic joint ([axis; 0], [0; axis]); zero for a fixed
+/// joint and for the free joint (whose columns joint_column gives).
+template <int N>
+inline Vec6 motion_subspace(const MultibodyModel<N>& m, int i) {
+  switch (m.joint[i]) {
+    case JointType::revolute: return spatial(m.axis[i], Vec3::Zero());
+    case JointType::prismatic: return spatial(Vec3::Zero(), m.axis[i]);
+    default: return Vec6::Zero();
+  }
+}
+
 /// X_J(q) and the motion subspace S of joint i (RBDA table 4.1: revolute E = rot(axis, q)^T,
 /// prismatic r = axis q).
 template <int N>
@@ -174,12 +184,12 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, T
           t * a[0] * a[1] + s * a[2], t * a[1] * a[1] + c, t * a[1] * a[2] - s * a[0],   //
           t * a[0] * a[2] - s * a[1], t * a[1] * a[2] + s * a[0], t * a[2] * a[2] + c;
       XJ.E = R.transpose();
-      S = spatial(a, Vec3::Zero());
+      S = motion_subspace(m, i);
       return;
     }
     case JointType::prismatic:
       XJ.r = a * q;
-      S = spatial(Vec3::Zero(), a);
+      S = motion_subspace(m, i);
       return;
     case JointType::fixed:
       S = Vec6::Zero();
@@ -193,17 +203,6 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, T
       S = Vec6::Zero();
       return;
     }
-  }
-}
-
-/// The motion subspace S of a revolute or prismatic joint ([axis; 0], [0; axis]); zero for a fixed
-/// joint and for the free joint (whose columns joint_column gives).
-template <int N>
-inline Vec6 motion_subspace(const MultibodyModel<N>& m, int i) {
-  switch (m.joint[i]) {
-    case JointType::revolute: return spatial(m.axis[i], Vec3::Zero());
-    case JointType::prismatic: return spatial(Vec3::Zero(), m.axis[i]);
-    default: return Vec6::Zero();
   }
 }
 
@@ -258,14 +257,6 @@ inline Vec6 base_acceleration(const MultibodyModel<N>& m) {
   return spatial(Vec3::Zero(), -m.gravity_w);
 }
 
-/// X^T I X for a 6 x 6 inertia in the child's frame carried to the parent's. (Kept dense: the
-/// 3 x 3 block form, RBDA eq. 2.24, is 10 % faster for ABA on the host but its size made GCC stop
-/// inlining the spatial helpers into RNEA and CRBA, which cost the M4F/M7 30-70 % more instructions
-/// for them.)
-inline Mat6 to_parent(const Transform& X, const Mat6& I) {
-  const Mat6 M = motion_matrix(X);
-  return M.transpose() * I * M;
-}
 }  // namespace detail
 
 namespace detail {
@@ -496,7 +487,6 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
             X.E(i1, i2) = si;
             X.E(i2, i1) = -si;
             X.E(i2, i2) = co;
-            for (int a = 0; a < 6; ++a) vJ[a] = T{};
             vJ[e] = qd[k];
           });
           break;
@@ -518,11 +508,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         for (int r = 0; r < 3; ++r)
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = R[0][r] * Xt.E(0, cc) + R[1][r] * Xt.E(1, cc) + R[2][r] * Xt.E(2, cc);
         for (int r = 0; r < 3; ++r) X.r[r] = splat<T>(Xt.r[r]);
-        const T w = qd[k];
-        for (int a = 0; a < 3; ++a) {
-          vJ[a] = w * ax[a];
-          vJ[3 + a] = T{};
-        }
+        for (int a = 0; a < 3; ++a) vJ[a] = qd[k] * ax[a];
         break;
       }
       case JointType::prismatic: {
@@ -532,11 +518,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
           X.r[r] = Xt.r[r] + g[r] * q[kq];
         }
-        const T w = qd[k];
-        for (int a = 0; a < 3; ++a) {
-          vJ[a] = T{};
-          vJ[3 + a] = w * ax[a];
-        }
+        for (int a = 0; a < 3; ++a) vJ[3 + a] = qd[k] * ax[a];
         break;
       }
       case JointType::fixed:
@@ -544,8 +526,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
           X.r[r] = splat<T>(Xt.r[r]);
         }
-        for (int a = 0; a < 6; ++a) vJ[a] = T{};
-        break;
+        break;  // vJ = 0
       case JointType::free: {
         // X_J: E = R(Q)^T (Q base -> world, [x y z w]), r = the base's position; then X_tree.
         const T x = q[kq + 3], y = q[kq + 4], z = q[kq + 5], w = q[kq + 6];
@@ -607,22 +588,21 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         c[3 + r] = (v[r1] * vJ[3 + r2] - v[r2] * vJ[3 + r1]) + (v[3 + r1] * vJ[r2] - v[3 + r2] * vJ[r1]);
       }
     }
-    // The body's inertia at its origin (RBDA eq. 2.63) as blocks: A = Ic + m (|c|^2 1 - c c^T),
-    // B = m c x, C = m 1.
+    // The body's inertia at its origin as blocks [Ibar, h x; h x^T, m 1] (rigid_inertia, RBDA eq. 2.63).
     const SpatialInertia& b = m.body[i];
     const Vec3& com = b.com;
-    const real cc2 = com.dot(com);
+    const RigidInertia I0 = rigid_inertia(b);
     auto& I = d.IA[i];
     for (int r = 0; r < 3; ++r)
       for (int cc = 0; cc < 3; ++cc) {
-        I(r, cc) = splat<T>(b.inertia_com(r, cc) + b.mass * ((r == cc ? cc2 : real(0)) - com[r] * com[cc]));
-        I(3 + r, 3 + cc) = splat<T>(r == cc ? b.mass : real(0));
+        I(r, cc) = splat<T>(I0.Ibar(r, cc));
+        I(3 + r, 3 + cc) = splat<T>(r == cc ? I0.m : real(0));
       }
-    const real mc[3] = {b.mass * com[0], b.mass * com[1], b.mass * com[2]};
+    const Vec3& h = I0.h;
     I(0, 3) = splat<T>(0), I(1, 4) = splat<T>(0), I(2, 5) = splat<T>(0);
-    I(0, 4) = splat<T>(-mc[2]), I(0, 5) = splat<T>(mc[1]);
-    I(1, 3) = splat<T>(mc[2]), I(1, 5) = splat<T>(-mc[0]);
-    I(2, 3) = splat<T>(-mc[1]), I(2, 4) = splat<T>(mc[0]);
+    I(0, 4) = splat<T>(-h[2]), I(0, 5) = splat<T>(h[1]);
+    I(1, 3) = splat<T>(h[2]), I(1, 5) = splat<T>(-h[0]);
+    I(2, 3) = splat<T>(-h[1]), I(2, 4) = splat<T>(h[0]);
     // pA = v x* (I v) - f_ext, with I v = [Ic w + c x f; f], f = m (v_lin - c x w) (inertia_times).
     T f[3], n[3];
     for (int r = 0; r < 3; ++r) {

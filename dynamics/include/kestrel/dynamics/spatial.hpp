@@ -5,8 +5,9 @@
 // point at the frame's origin; a force vector is [moment about the origin; force] = [n; f]. A
 // transform X from frame A to frame B is kept as (E, r): E rotates A coordinates into B
 // coordinates and r is B's origin in A coordinates, so X m = [E w; E (v - r x w)]; forces
-// transform by X* = X^{-T}, and the transpose X^T carries a force from B back to A. The 6 x 6
-// forms are built only where a 6 x 6 product is the algorithm (articulated inertias).
+// transform by X* = X^{-T}, and the transpose X^T carries a force from B back to A. No 6 x 6
+// matrix is formed: products are written on 3-vectors and 3 x 3 blocks (aba's articulated
+// inertias, multibody.hpp).
 //
 // Core rules: no heap (Eigen fixed-size), no exceptions, float or double (kernel/types.hpp).
 #pragma once
@@ -56,15 +57,6 @@ inline Transform compose(const Transform& X2, const Transform& X1) {
   X.r = X1.r + X1.E.transpose() * X2.r;
   return X;
 }
-/// The 6 x 6 matrix of X acting on motion vectors (RBDA eq. 2.26).
-inline Mat6 motion_matrix(const Transform& X) {
-  Mat6 M = Mat6::Zero();
-  M.template topLeftCorner<3, 3>() = X.E;
-  M.template bottomRightCorner<3, 3>() = X.E;
-  M.template bottomLeftCorner<3, 3>() = -X.E * hat(X.r);
-  return M;
-}
-
 /// Motion cross product m x n (crm, RBDA eq. 2.31).
 inline Vec6 cross_motion(const Vec6& m, const Vec6& n) {
   const Vec3 w = ang(m), v = lin(m);
@@ -83,17 +75,6 @@ struct SpatialInertia {
   Vec3 com = Vec3::Zero();
   Mat3 inertia_com = Mat3::Zero();
 };
-
-/// I at the frame's origin: [Ic + m c x c x^T, m c x; m c x^T, m 1].
-inline Mat6 inertia_matrix(const SpatialInertia& b) {
-  const Mat3 C = hat(b.com);
-  Mat6 I;
-  I.template topLeftCorner<3, 3>() = b.inertia_com + b.mass * C * C.transpose();
-  I.template topRightCorner<3, 3>() = b.mass * C;
-  I.template bottomLeftCorner<3, 3>() = b.mass * C.transpose();
-  I.template bottomRightCorner<3, 3>() = b.mass * Mat3::Identity();
-  return I;
-}
 
 /// A rigid body's inertia (or a rigid composite's: a sum of rigid-body inertias is one) at a
 /// frame's origin, in that frame, in its 10 numbers (RBDA section 2.13, eq. 2.62): mass m, first
