@@ -86,11 +86,17 @@ def evaluate(policy: Callable[[np.ndarray], np.ndarray], env_id: str, episodes: 
         # noise), taken before the step that follows them.
         scale_lin, scale_yaw = _loco_obs_scales(env_id, overrides)
     before = env.task.infos
+    hold = max(1, int(getattr(policy, "hold", 1)))  # a recurrent policy decides every `hold` env-steps
+    t = 0
+    action = None
     while not done.all():
         if locomotion:
             cmd_xy = obs[:, 9:11] / scale_lin
             cmd_yaw = obs[:, 11] / scale_yaw
-        obs, r, te, tr, info = env.step(policy(obs))
+        if t % hold == 0:
+            action = policy(obs)
+        t += 1
+        obs, r, te, tr, info = env.step(action)
         alive = ~done
         if locomotion:
             live = alive & ~(te | tr)
@@ -155,21 +161,51 @@ class _Timer:
 
 
 def _rsl_rl_cfg(args) -> dict:
+    # --rnn: rsl-rl-lib's RNNModel for actor and critic (a GRU or LSTM over the observations, then
+    # the MLP), legged_gym's ActorCriticRecurrent in rsl-rl-lib 5's form; PPO then trains on whole
+    # rollouts per environment with the hidden states reset at episode ends.
+    model = "rsl_rl.models.MLPModel"
+    rnn: dict = {}
+    if getattr(args, "rnn", None):
+        model = "rsl_rl.models.RNNModel"
+        rnn = {"rnn_type": args.rnn[0], "rnn_hidden_dim": args.rnn[1], "rnn_num_layers": 1}
     return {
         "num_steps_per_env": args.rollout,
         "save_interval": 10**9,
         "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
-        "actor": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": list(args.hidden), "activation": "elu",
-                  "obs_normalization": bool(args.obs_norm),
+        "actor": {"class_name": model, "hidden_dims": list(args.hidden), "activation": "elu",
+                  "obs_normalization": bool(args.obs_norm), **rnn,
                   "distribution_cfg": {"class_name": "rsl_rl.modules.GaussianDistribution", "init_std": args.init_std}},
-        "critic": {"class_name": "rsl_rl.models.MLPModel", "hidden_dims": list(args.hidden), "activation": "elu",
-                   "obs_normalization": bool(args.obs_norm)},
+        "critic": {"class_name": model, "hidden_dims": list(args.hidden), "activation": "elu",
+                   "obs_normalization": bool(args.obs_norm), **rnn},
         "algorithm": {"class_name": "rsl_rl.algorithms.PPO", "num_learning_epochs": args.epochs,
                       "num_mini_batches": args.minibatches, "clip_param": 0.2, "gamma": args.gamma, "lam": args.lam,
                       "value_loss_coef": 1.0, "entropy_coef": args.entropy, "learning_rate": args.lr,
                       "max_grad_norm": 1.0, "schedule": "adaptive", "desired_kl": 0.01},
         "check_for_nan": False,
     }
+
+
+class _RecurrentInference:
+    """The deterministic policy of an rsl-rl-lib RNNModel with a hidden state of its own (zeros,
+    sized by the first batch): the training rollout's states are left alone. The model's own
+    pieces in its order: observation normaliser, RNN, MLP, the distribution's deterministic output."""
+
+    def __init__(self, model):
+        import copy
+
+        self.norm = copy.deepcopy(model.obs_normalizer)
+        self.rnn = copy.deepcopy(model.rnn.rnn)
+        self.mlp = copy.deepcopy(model.mlp)
+        self.out = model.distribution.as_deterministic_output_module() if model.distribution is not None else None
+        for m in (self.norm, self.rnn, self.mlp):
+            m.eval()
+        self.state = None
+
+    def __call__(self, obs):
+        x, self.state = self.rnn(self.norm(obs).unsqueeze(0), self.state)
+        y = self.mlp(x.squeeze(0))
+        return self.out(y) if self.out is not None else y
 
 
 class Learner:
@@ -272,6 +308,9 @@ class Learner:
             from tensordict import TensorDict
 
             net = self.runner.get_inference_policy()
+            recurrent = bool(getattr(net, "is_recurrent", False))
+            if recurrent:
+                net = _RecurrentInference(net)
             low, high = self.env.single_action_space.low, self.env.single_action_space.high
             same = bool(np.all(low == low[0]) and np.all(high == high[0]))
             lo = float(low[0]) if same else torch.as_tensor(low)
@@ -280,11 +319,19 @@ class Learner:
 
             def act(obs: np.ndarray) -> np.ndarray:
                 with torch.inference_mode():
-                    o = TensorDict({"policy": torch.from_numpy(np.array(obs))}, batch_size=[obs.shape[0]])
-                    a = net(o)
+                    if recurrent:
+                        a = net(torch.from_numpy(np.array(obs)))
+                    else:
+                        o = TensorDict({"policy": torch.from_numpy(np.array(obs))}, batch_size=[obs.shape[0]])
+                        a = net(o)
                     a = torch.tanh(a) if squash else a.clamp(lo, hi)
                     return a.numpy().astype(np.float32, copy=False)
 
+            if recurrent:
+                # Its state moves once per decision, as in training: the evaluation holds each
+                # action for the training's action repeat (a feed-forward policy decides every
+                # env-step there).
+                act.hold = self.venv.action_repeat  # type: ignore[attr-defined]
             return act
         venv = self.venv
         model = self.model
@@ -303,6 +350,8 @@ class Learner:
         scale = self.env.action_scale
         offset = self.env.action_offset
         if self.kind == "rsl_rl":
+            if getattr(self.runner.alg.get_policy(), "is_recurrent", False):
+                raise ValueError("a recurrent policy (--rnn) has no export to the core's feed-forward MLP")
             space = self.env.single_action_space
             spec = export.from_rsl_rl(self.runner.alg.save()["actor_state_dict"], space.low, space.high, activation="elu",
                                       squash="tanh" if self.squash else "none", action_scale=scale,
@@ -485,6 +534,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--rollout", type=int, default=None, help="learner steps (decisions) per env per update")
     p.add_argument("--hidden", default=None, help="actor and critic hidden layer sizes, comma list (default 64,64; "
                    "the legged ids: 128,64); the export to the core's MLP takes two hidden layers")
+    p.add_argument("--rnn", default=None,
+                   help="rsl_rl: a recurrent actor and critic, TYPE:SIZE with TYPE gru or lstm (e.g. gru:64): rsl-rl-lib's "
+                        "RNNModel, its state reset at episode ends; evaluated with the training's action repeat; no --export")
     p.add_argument("--final-eval-episodes", type=int, default=None,
                    help="after training, evaluate the final policy on this many episodes too (summary.json: final_eval)")
     p.add_argument("--resume", default=None, help="rsl_rl: go on from this checkpoint (.pt of a run of the same task and networks)")
@@ -504,6 +556,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--task-set", default=None,
                    help="scenario `task:` keys as a JSON object, e.g. '{\"navigation\": {\"action_space\": \"velocity\"}}' "
                         "(docs/scenario_reference.md; checked like a scenario's)")
+    p.add_argument("--sensors", default=None,
+                   help="the robot's sensors as a JSON list of scenario `sensors:` entries (replacing the task's), e.g. "
+                        "'[{\"name\": \"vl53l5cx\", \"max_range_m\": 10}]' (docs/scenario_reference.md; checked like a scenario's)")
     p.add_argument("--train-task-set", default=None,
                    help="scenario `task:` keys as a JSON object for the training environments only, on top of --task-set: "
                         "training-side randomisation the evaluation must not see, e.g. more frequent pushes "
@@ -518,7 +573,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                    help="position setpoint: target - position rotated into the vehicle frame (auto: on for "
                         + ", ".join(sorted(_VEHICLE_FRAME_OBS)) + ")")
     p.add_argument("--tensorboard", type=int, default=1, help="TensorBoard event files in --out (1/0)")
-    p.add_argument("--export", type=int, default=1, help="write the final policy as --out/policy.onnx and policy.hpp (1/0)")
+    p.add_argument("--export", type=int, default=None,
+                   help="write the final policy as --out/policy.onnx and policy.hpp (1/0; default 1, with --rnn 0)")
     p.add_argument("--address", default=None,
                    help="train with the environments in Ray actors (kestrel.cluster.RayVectorEnv): auto, ray://HOST:10001, "
                         "HOST:6379, or local (a Ray on this machine); the learner stays in this process")
@@ -544,6 +600,18 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         if not args.hidden or min(args.hidden) < 1:
             raise SystemExit(f"--hidden: expected positive layer sizes, got {args.hidden!r}")
 
+    if args.rnn is not None:
+        kind, _, size = args.rnn.partition(":")
+        if kind not in ("gru", "lstm") or not size.isdigit() or int(size) < 1:
+            raise SystemExit(f"--rnn: expected TYPE:SIZE with TYPE gru or lstm and SIZE >= 1, e.g. gru:64; got {args.rnn!r}")
+        if args.learner != "rsl_rl":
+            raise SystemExit(f"--rnn: takes --learner rsl_rl (got {args.learner})")
+        if args.export:
+            raise SystemExit("--rnn: a recurrent policy has no export to the core's feed-forward MLP (leave out --export)")
+        args.rnn = (kind, int(size))
+    if args.export is None:
+        args.export = 0 if args.rnn else 1
+
     overrides = {}
     scale = _AUTO_ACTION_SCALE.get(args.task) if args.action_scale == "auto" else (
         None if args.action_scale.lower() == "none" else [float(x) for x in args.action_scale.split(",")])
@@ -560,6 +628,14 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
         overrides["vehicle_frame_obs"] = True
     if args.task_set:
         overrides["task"] = _task_keys("--task-set", args.task_set)
+    if args.sensors:
+        try:
+            sensors = json.loads(args.sensors)
+        except json.JSONDecodeError as e:
+            raise SystemExit(f"--sensors: expected a JSON list of sensor entries, got {args.sensors!r} ({e})")
+        if not isinstance(sensors, list):
+            raise SystemExit(f"--sensors: expected a JSON list of sensor entries, got {args.sensors!r}")
+        overrides["sensors"] = sensors
     if args.episode_len:
         overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
     train_overrides = overrides
@@ -713,7 +789,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                "env_steps": done_steps, "train_s": round(t_train, 2), "sim_s": round(timer.sim_s, 2),
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
-               "final_eval": final_eval, "hidden": list(args.hidden), "task_set": args.task_set,
+               "final_eval": final_eval, "hidden": list(args.hidden), "rnn": list(args.rnn) if args.rnn else None,
+               "sensors": args.sensors, "task_set": args.task_set,
                "train_task_set": args.train_task_set, "resume": args.resume,
                "train_episodes": int(env.task.infos.get("episodes", 0)),
                "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count(),

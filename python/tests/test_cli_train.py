@@ -141,3 +141,78 @@ def test_train_task_set_refuses_what_is_not_a_json_object(tmp_path):
     for bad in ("{nope", "[1, 2]"):
         with pytest.raises(SystemExit, match="--train-task-set: expected a JSON object"):
             main([TASK, "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--train-task-set", bad])
+
+
+def test_sensors_replace_the_task_sensors(tmp_path):
+    # --sensors: the robot's sensors as scenario entries; navigation_task's observations then pool
+    # the new image (here a 4 x 4 ToF into 4 x 4 cells: 17 + 16 observations), and the summary keeps them.
+    from kestrel.train import main
+
+    s = main(["Kestrel-Navigation-v0", "--envs", "8", "--steps", "400", "--eval-every", "400", "--eval-episodes", "4",
+              "--episode-len", "20", "--threads", "1", "--out", str(tmp_path), "--quiet", "--export", "1",
+              "--sensors", '[{"name": "vl53l5cx", "height": 4, "width": 4, "max_range_m": 10}]',
+              "--task-set", '{"navigation": {"pool_rows": 4, "pool_cols": 4}}'])
+    assert s["sensors"] == '[{"name": "vl53l5cx", "height": 4, "width": 4, "max_range_m": 10}]'
+    assert s["export"] is not None
+    import onnx
+
+    model = onnx.load(str(tmp_path / "policy.onnx"))
+    dims = [d.dim_value for d in model.graph.input[0].type.tensor_type.shape.dim]
+    assert dims[-1] == 17 + 16, dims
+
+
+def test_sensors_refuse_what_is_not_a_list_of_entries(tmp_path):
+    import pytest
+
+    from kestrel.train import main
+
+    with pytest.raises(SystemExit, match="--sensors: expected a JSON list"):
+        main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--sensors",
+              '{"name": "vl53l5cx"}'])
+
+
+def test_rnn_policy_trains_and_its_evaluation_copy_matches_the_model(tmp_path):
+    # --rnn gru:16: rsl-rl-lib's RNNModel as actor and critic. The evaluation's policy (a copy with
+    # its own hidden state, deciding every action-repeat env-steps) gives the model's own
+    # deterministic actions step after step, and leaves the training rollout's hidden state alone.
+    import argparse
+
+    import pytest
+    import torch
+    from tensordict import TensorDict
+
+    from kestrel.train import Learner, main
+    from kestrel.vector_env import make_vec
+
+    s = main(["Kestrel-Navigation-v0", "--envs", "8", "--steps", "960", "--eval-every", "960", "--eval-episodes", "4",
+              "--episode-len", "30", "--threads", "1", "--out", str(tmp_path), "--quiet", "--rnn", "gru:16"])
+    assert s["rnn"] == ["gru", 16] and s["export"] is None and s["env_steps"] >= 960
+
+    env = make_vec("Kestrel-Navigation-v0", num_envs=6, seed=3, threads=1)
+    args = argparse.Namespace(seed=0, torch_threads=1, learner="rsl_rl", obs_norm=1, squash=1, reward_scale=0.02,
+                              action_repeat=5, shaping=0.0, gamma=0.98, rollout=4, hidden=[16, 16], init_std=1.0,
+                              epochs=1, minibatches=1, lam=0.95, entropy=0.0, lr=1e-3, rnn=("gru", 8), resume=None)
+    learner = Learner(args, env)
+    learner.train(6 * 4 * 5)
+    model = learner.runner.alg.get_policy()
+    before = model.get_hidden_state().clone()
+    act = learner.policy()
+    assert act.hold == 5
+    obs, _ = env.reset(seed=3)
+    model_state = model.get_hidden_state()
+    model.reset()
+    for _ in range(4):
+        a = act(obs)
+        with torch.inference_mode():
+            y = model(TensorDict({"policy": torch.from_numpy(np.array(obs))}, batch_size=[obs.shape[0]]))
+        np.testing.assert_array_equal(a, torch.tanh(y).numpy())
+        obs, *_ = env.step(a)
+    model.reset(hidden_state=model_state)
+    assert torch.equal(model.get_hidden_state(), before)
+    with pytest.raises(ValueError, match="recurrent policy"):
+        learner.spec()
+    with pytest.raises(SystemExit, match="--rnn: expected TYPE:SIZE"):
+        main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--rnn", "rnn:8"])
+    with pytest.raises(SystemExit, match="no export"):
+        main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--rnn", "gru:8",
+              "--export", "1"])
