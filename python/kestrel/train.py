@@ -373,15 +373,20 @@ class Learner:
             self.venv.save(path + ".vecnormalize.pkl")
 
 
+def _json_arg(flag: str, text: str, kind: type, what: str):
+    """A JSON argument of type `kind` (dict or list), else a clear exit naming the flag and `what`."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise SystemExit(f"{flag}: expected {what}, got {text!r} ({e})")
+    if not isinstance(value, kind):
+        raise SystemExit(f"{flag}: expected {what}, got {text!r}")
+    return value
+
+
 def _task_keys(flag: str, text: str) -> dict:
     """A --task-set style argument: a JSON object of scenario `task:` keys, else a clear exit."""
-    try:
-        keys = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise SystemExit(f"{flag}: expected a JSON object of task section keys, got {text!r} ({e})")
-    if not isinstance(keys, dict):
-        raise SystemExit(f"{flag}: expected a JSON object of task section keys, got {text!r}")
-    return keys
+    return _json_arg(flag, text, dict, "a JSON object of task section keys")
 
 
 def plot(rows: list[dict], path: str, title: str, target_success: float | None = None) -> None:
@@ -550,7 +555,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--target-success", type=float, default=None, help="stop at the first evaluation reaching it")
     p.add_argument("--rollout", type=int, default=None, help="learner steps (decisions) per env per update")
     p.add_argument("--hidden", default=None, help="actor and critic hidden layer sizes, comma list (default 64,64; "
-                   "the legged ids: 128,64); the export to the core's MLP takes two hidden layers")
+                   "the legged ids: 128,64; Kestrel-Navigation-v0: 256,256); the export to the core's MLP takes two hidden layers")
     p.add_argument("--rnn", default=None,
                    help="rsl_rl: a recurrent actor and critic, TYPE:SIZE with TYPE gru or lstm (e.g. gru:64): rsl-rl-lib's "
                         "RNNModel, its state reset at episode ends; evaluated with the training's action repeat; no --export")
@@ -578,7 +583,8 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                         "'[{\"name\": \"vl53l5cx\", \"max_range_m\": 10}]' (docs/scenario_reference.md; checked like a scenario's)")
     p.add_argument("--train-task-set", default=None,
                    help="scenario `task:` keys as a JSON object for the training environments only, on top of --task-set: "
-                        "training-side randomisation the evaluation must not see, e.g. more frequent pushes "
+                        "training-side randomisation the evaluation must not see (it replaces a task's default one: "
+                        "Kestrel-Navigation-v0's curriculum thresholds and crash penalty), e.g. more frequent pushes "
                         "'{\"locomotion\": {\"push_interval_s\": 4}}'")
     p.add_argument("--action-scale", default="auto",
                    help="normalised actions in [-1, 1] times these (comma list, one or one per action), 'none' for the "
@@ -646,13 +652,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     if args.task_set:
         overrides["task"] = _task_keys("--task-set", args.task_set)
     if args.sensors:
-        try:
-            sensors = json.loads(args.sensors)
-        except json.JSONDecodeError as e:
-            raise SystemExit(f"--sensors: expected a JSON list of sensor entries, got {args.sensors!r} ({e})")
-        if not isinstance(sensors, list):
-            raise SystemExit(f"--sensors: expected a JSON list of sensor entries, got {args.sensors!r}")
-        overrides["sensors"] = sensors
+        overrides["sensors"] = _json_arg("--sensors", args.sensors, list, "a JSON list of sensor entries")
     if args.episode_len:
         overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
     train_overrides = overrides
