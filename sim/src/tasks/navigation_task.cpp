@@ -48,6 +48,12 @@ float navigation_reward(const float e[3], const float e_prev[3], bool crash, con
   return mult * (pos_reward + very_close + closer_reward + distance_reward) + (diff_penalty + abs_penalty);
 }
 
+float navigation_clearance_reward(float nearest_m, const NavigationRewardParams& p) {
+  const float pen = static_cast<float>(p.clearance_penalty), d0 = static_cast<float>(p.clearance_m);
+  if (pen == 0.0f || !(nearest_m < d0)) return 0.0f;  // off, clear (or a NaN range: no penalty)
+  return pen * (1.0f - std::max(nearest_m, 0.0f) / d0);
+}
+
 int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level) {
   // Compared in float32, as the reference's tensor comparison is.
   const float rate = static_cast<float>(success_rate);
@@ -234,8 +240,9 @@ class NavigationTask final : public Task {
       float e_v[3];
       error_vehicle(env, e_v);
       const bool crash = crash_or_out(env);
-      const float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
-                                        &action_prev_[i * kNavActionDim], progress, p_.reward);
+      float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
+                                  &action_prev_[i * kNavActionDim], progress, p_.reward);
+      if (p_.reward.clearance_penalty != 0 && !crash) r += navigation_clearance_reward(nearest_range_m(env), p_.reward);
       for (int k = 0; k < 3; ++k) err_prev_[i * 3 + k] = e_v[k];
       // The reference's episode end: a crash terminates; the time limit truncates, a success
       // when within the radius of the goal then (arriving does not end the episode).
@@ -269,6 +276,18 @@ class NavigationTask final : public Task {
   }
 
  private:
+  // The nearest range (m) of the robot's first range image: every ray, not the pooled cells.
+  float nearest_range_m(int env) const {
+    const RangeImage img = sim_->range_image(env, 0);
+    real d = img.max_range_m;
+    for (int r = 0; r < img.height; ++r)
+      for (int c = 0; c < img.width; ++c) {
+        const real v = img.at(r, c);
+        if (v >= 0 && v < d) d = v;  // a negative range (no return) or a NaN is no obstacle
+      }
+    return static_cast<float>(d);
+  }
+
   void apply_level() {
     sim_->set_curriculum_level(static_cast<real>(book_.progress(p_.curriculum)));
     infos_.curriculum_level = book_.level;

@@ -61,6 +61,20 @@ TEST(NavigationReward, HandComputedValues) {
   EXPECT_EQ(navigation_reward(n, n, true, a0, a0, 0.0f, p), -100.0f);
 }
 
+// The clearance term (not the reference's, off by default): -4 at range 0, 0 from clearance_m on.
+TEST(NavigationReward, ClearanceTerm) {
+  NavigationRewardParams p;
+  EXPECT_EQ(navigation_clearance_reward(0.1f, p), 0.0f);  // off by default: the reference's reward
+  p.clearance_penalty = -4.0f;
+  p.clearance_m = 2.0f;
+  EXPECT_FLOAT_EQ(navigation_clearance_reward(0.5f, p), -3.0f);
+  EXPECT_FLOAT_EQ(navigation_clearance_reward(0.0f, p), -4.0f);
+  EXPECT_FLOAT_EQ(navigation_clearance_reward(1.5f, p), -1.0f);
+  EXPECT_EQ(navigation_clearance_reward(2.0f, p), 0.0f);
+  EXPECT_EQ(navigation_clearance_reward(7.0f, p), 0.0f);
+  EXPECT_EQ(navigation_clearance_reward(std::nanf(""), p), 0.0f);
+}
+
 TEST(NavigationReward, CurriculumRule) {
   NavigationCurriculum c;  // 0..10, +2 above 0.7, -1 below 0.6
   EXPECT_EQ(next_curriculum_level(c, 0.71, 3), 5);
@@ -135,6 +149,35 @@ TEST(NavigationTask, ImageSeesTheGroundWhenPitchedDown) {
   world_of(*t).render_sensors(0);
   min_pool_ranges(world_of(*t).sensor_ranges(0, 0), world_of(*t).sensor_height(0), world_of(*t).sensor_width(0), 4, 8, 8, pool.data());
   for (float v : pool) EXPECT_EQ(v, 1.0f);
+}
+
+// With clearance_penalty set, a robot whose ToF sees the floor 1 m away gets the clearance term
+// of its nearest ray on top of the reference's reward; the same step without it does not.
+TEST(NavigationTask, ClearancePenaltyFromTheNearestRay) {
+  NavigationParams with;
+  with.reward.clearance_penalty = -4;
+  with.reward.clearance_m = 4;
+  auto a = build(nav_config(2, 5));
+  auto b = build(nav_config(2, 5), with);
+  ASSERT_TRUE(a && b);
+  for (Task* t : {a.get(), b.get()}) {
+    RigidBodyState& st = world_of(*t).robot_state(0, 0);
+    st.position_w = Vec3(0, 0, 1);
+    st.orientation_wb = quat_from_euler_xyz(0, 80 * kPi / 180, 0);  // nose down: the floor ~1 m ahead
+  }
+  const std::vector<float> zero(2 * 3, 0.0f);
+  a->step(zero.data());
+  b->step(zero.data());
+  ASSERT_EQ(a->terminations()[0], 0);
+  const real* ranges = world_of(*b).sensor_ranges(0, 0);
+  real nearest = 4;
+  for (int k = 0; k < world_of(*b).sensor_height(0) * world_of(*b).sensor_width(0); ++k)
+    if (ranges[k] >= 0) nearest = std::min(nearest, ranges[k]);
+  EXPECT_LT(nearest, 1.5_r);
+  EXPECT_GT(nearest, 0.5_r);
+  const float term = navigation_clearance_reward(static_cast<float>(nearest), with.reward);
+  EXPECT_LT(term, -2.0f);
+  EXPECT_EQ(b->rewards()[0], a->rewards()[0] + term);
 }
 
 // The reference's episode end: arriving does not end the episode; at the time limit an episode

@@ -268,6 +268,12 @@ struct NavigationRewardParams {
   real z_absolute_action_penalty_magnitude = 1.5f, z_absolute_action_penalty_exponent = 1.0f;
   real yawrate_absolute_action_penalty_magnitude = 1.5f, yawrate_absolute_action_penalty_exponent = 2.0f;
   real collision_penalty = -100.0f;
+  // Not in the reference (0 turns it off, the default): a penalty per env-step while the nearest
+  // range of the robot's range image is within clearance_m, growing linearly from 0 there to
+  // clearance_penalty at range 0 (training shaping: it teaches a margin from obstacles the forward
+  // view is about to lose at its edge, where most crashes of trained policies happen).
+  real clearance_penalty = 0.0f;
+  real clearance_m = 1.0f;
 };
 
 /// How navigation_task's actions become the velocity controller's [vx, vy, vz, yaw_rate] command.

@@ -39,7 +39,10 @@
 //     error, so its first "getting closer" term of an episode compares with the old goal);
 //   - out of bounds (World's 0.5 m margin) counts as a crash as a contact does;
 //   - curriculum levels are 0..10 steps of the obstacle-count range of the environment's asset
-//     classes (the reference counts obstacles, 15..50).
+//     classes (the reference counts obstacles, 15..50);
+//   - an optional clearance term, off by default (NavigationRewardParams::clearance_penalty): a
+//     penalty per env-step growing as the nearest ray of the range image falls within clearance_m,
+//     for training (navigation_clearance_reward).
 #pragma once
 
 #include <memory>
@@ -70,6 +73,11 @@ struct NavigationParams {
 /// `progress` the curriculum progress fraction in [0, 1]; crash > 0 gives the collision penalty.
 float navigation_reward(const float pos_error[3], const float prev_pos_error[3], bool crash, const float action[4],
                         const float prev_action[4], float progress, const NavigationRewardParams& p);
+
+/// The clearance term (not the reference's; p.clearance_penalty 0 turns it off): the penalty per
+/// env-step for the nearest range nearest_m (m) of the robot's range image,
+/// clearance_penalty x (1 - nearest_m / clearance_m) within clearance_m, else 0.
+float navigation_clearance_reward(float nearest_m, const NavigationRewardParams& p);
 
 /// The reference's update_curriculim_level: the next level after a window with this success rate.
 int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level);
