@@ -20,7 +20,7 @@ def main(argv: list[str]) -> None:
     runs: dict[str, list[dict]] = defaultdict(list)
     for row in csv.DictReader(open(src)):
         runs[row["run"]].append(row)
-    fig, ax = plt.subplots(figsize=(10, 6))
+    fig, ax = plt.subplots(figsize=(15, 6.5))
     cmap = plt.get_cmap("tab20")
     for k, (run, rows) in enumerate(runs.items()):
         r0 = rows[0]
@@ -38,7 +38,7 @@ def main(argv: list[str]) -> None:
     ax.set_title("navigation_task, rsl_rl PPO: what each change did (2-core machine, stops 35-36)")
     ax.set_ylim(0, 100)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, loc="upper left")
+    ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the axes: 26 runs
     fig.tight_layout()
     fig.savefig(dst, dpi=110)
     print(dst)
