@@ -276,16 +276,13 @@ class NavigationTask final : public Task {
   }
 
  private:
-  // The nearest range (m) of the robot's first range image: every ray, not the pooled cells.
+  // The nearest range (m) of the robot's first range image: every ray (the whole image min-pooled
+  // to one cell, with the observation's rule for no-return rays), not the observation's cells.
   float nearest_range_m(int env) const {
     const RangeImage img = sim_->range_image(env, 0);
-    real d = img.max_range_m;
-    for (int r = 0; r < img.height; ++r)
-      for (int c = 0; c < img.width; ++c) {
-        const real v = img.at(r, c);
-        if (v >= 0 && v < d) d = v;  // a negative range (no return) or a NaN is no obstacle
-      }
-    return static_cast<float>(d);
+    float nearest = 1.0f;
+    min_pool_image(img, 1, 1, &nearest);
+    return nearest * static_cast<float>(img.max_range_m);
   }
 
   void apply_level() {
