@@ -57,6 +57,8 @@ GYM_IDS: dict[str, tuple[str, dict]] = {
     "Kestrel-PositionSetpointAttitude-v0": ("position_setpoint_task", {"controller": "lee_attitude_control"}),
     # ... with direct motor commands (end-to-end).
     "Kestrel-PositionSetpointMotors-v0": ("position_setpoint_task", {"controller": "direct_motor_control"}),
+    # navigation_task's own scene, robot start included (the reference's init_config: facing the
+    # goal's end within +-pi/6, velocities and rates within +-0.2).
     "Kestrel-Navigation-v0": ("navigation_task", {}),
     "Kestrel-GoalBoxThroughGap-v0": ("goal_box_through_gap", {}),
     # legged_gym's locomotion task (locomotion_task) with each robot's rewards: the registered task

@@ -161,6 +161,30 @@ def test_sensors_replace_the_task_sensors(tmp_path):
     assert dims[-1] == 17 + 16, dims
 
 
+def test_navigation_trains_and_evaluates_on_proximity_cells_unless_told_otherwise(tmp_path):
+    # Kestrel-Navigation-v0's default --task-set: image cells as proximities, in training and in the
+    # evaluations (the observation the policy is trained on); a --task-set of one's own replaces it.
+    import json
+
+    import numpy as np
+
+    from kestrel.train import main
+    from kestrel.vector_env import make_vec
+
+    s = main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "40", "--eval-every", "40", "--eval-episodes", "2",
+              "--episode-len", "10", "--threads", "1", "--out", str(tmp_path), "--quiet", "--export", "0"])
+    task_set = json.loads(s["task_set"])
+    assert task_set["navigation"]["image_encoding"] == "proximity"
+    envs = [make_vec("Kestrel-Navigation-v0", num_envs=3, seed=4, threads=1, sensors=json.loads(s["sensors"]), **t)
+            for t in ({"task": task_set}, {})]
+    near, ranged = (e.reset(seed=4)[0][:, 17:] for e in envs)
+    np.testing.assert_allclose(near, 1.0 / (1.0 + ranged * (10.0 / 0.5)), rtol=1e-6)
+    s = main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "40", "--eval-every", "40", "--eval-episodes", "2",
+              "--episode-len", "10", "--threads", "1", "--out", str(tmp_path / "own"), "--quiet", "--export", "0",
+              "--task-set", '{"navigation": {"pool_rows": 4}}'])
+    assert "image_encoding" not in s["task_set"]
+
+
 def test_sensors_refuse_what_is_not_a_list_of_entries(tmp_path):
     import pytest
 

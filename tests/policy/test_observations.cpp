@@ -50,3 +50,14 @@ KTEST(PolicyObservations, MinPoolingOfAStridedImage) {
   pl::min_pool_ranges(far, 1, 2, 2, 1, 4, 1, 1, all);
   KEXPECT_EQ(all[0], 1.0f);
 }
+
+KTEST(PolicyObservations, ProximityCells) {
+  // Range cells of a 10 m sensor as proximities with scale 0.5 m: contact 1, 0.5 m reads 0.5,
+  // 2 m reads 0.2, no return (10 m) 1 / 21.
+  float cells[4] = {0.0f, 0.05f, 0.2f, 1.0f};
+  pl::proximity_from_range_cells(cells, 4, 10.0f, 0.5f);
+  KEXPECT_EQ(cells[0], 1.0f);
+  KEXPECT_NEAR(cells[1], 0.5f, 1e-7f);
+  KEXPECT_NEAR(cells[2], 0.2f, 1e-7f);
+  KEXPECT_NEAR(cells[3], 1.0f / 21.0f, 1e-7f);
+}

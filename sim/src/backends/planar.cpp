@@ -802,6 +802,10 @@ class PlanarSimulator final : public Simulator {
         ev.episode_fallback = true;
       }
       const real yaw = rng.uniform(-cfg_.robot.max_init_yaw_rad, cfg_.robot.max_init_yaw_rad);
+      // The rigid World's start-velocity draws (three each), of which the plane keeps x, y and the yaw rate.
+      const real v0 = cfg_.robot.max_init_linvel_m_s, w0 = cfg_.robot.max_init_angvel_rad_s;
+      const Vec3 v_w = v0 > 0 ? scene::uniform_vec(rng, Vec3::Constant(-v0), Vec3::Constant(v0)) : Vec3::Zero();
+      const Vec3 w_w = w0 > 0 ? scene::uniform_vec(rng, Vec3::Constant(-w0), Vec3::Constant(w0)) : Vec3::Zero();
       const Vec3& start = place.start_w;
       const Vec3& target = place.target_w;
       target_w_[3 * i] = target[0];
@@ -810,7 +814,7 @@ class PlanarSimulator final : public Simulator {
       reset_controller(i, rng, true);
       b2Body* b = ev.robots[static_cast<std::size_t>(r)];
       apply_mass(b, i);
-      place_body(b, i, start[0], start[1], yaw, 0, 0, 0);
+      place_body(b, i, start[0], start[1], yaw, v_w[0], v_w[1], w_w[2]);
       crashed_[i] = 0;
       force_xy_[2 * i] = force_xy_[2 * i + 1] = normal_sum_[i] = 0;
       real* a = &actions_[i * static_cast<std::size_t>(action_dim_)];

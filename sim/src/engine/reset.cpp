@@ -101,6 +101,9 @@ void reset_env(const WorldModel& m, WorldData& d, int env) {
     st.position_w = place.start_w;
     const real yaw = rng.uniform(-m.cfg.robot.max_init_yaw_rad, m.cfg.robot.max_init_yaw_rad);
     st.orientation_wb = quat_from_euler_xyz(0, 0, yaw);
+    const real v0 = m.cfg.robot.max_init_linvel_m_s, w0 = m.cfg.robot.max_init_angvel_rad_s;
+    if (v0 > 0) st.linvel_w = uniform_vec(rng, Vec3::Constant(-v0), Vec3::Constant(v0));
+    if (w0 > 0) st.angvel_b = rotate_inverse(st.orientation_wb, uniform_vec(rng, Vec3::Constant(-w0), Vec3::Constant(w0)));
     d.state[i] = st;
     real hover[al::kMaxRotors] = {};
     const real per_motor = m.body.params.mass_kg * kStandardGravity / static_cast<real>(m.mr.airframe.num_rotors);

@@ -423,7 +423,7 @@ WorldConfig parse(const YAML::Node& root, const std::string& dir, const std::str
                           task_defaults(section_name(root["task"], "task"), td);
   parse_sim(root["sim"] ? root["sim"] : YAML::Node(td.sim), c.sim);
   parse_env(root["env"] ? root["env"] : YAML::Node(td.env), c.env, dir, source);
-  parse_robot(root["robot"] ? root["robot"] : YAML::Node(td.robot), c.robot, dir);
+  parse_robot(root["robot"] ? root["robot"] : YAML::Load(td.robot), c.robot, dir);  // a name or a {name, fields} map
   const YAML::Node ctrl = root["controller"] ? root["controller"] : YAML::Node(td.controller);
   parse_controller(ctrl, c.controller);
   const YAML::Node task = root["task"] ? root["task"] : YAML::Node("position_setpoint");

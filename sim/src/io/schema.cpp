@@ -136,6 +136,7 @@ const std::pair<const char*, JointControlMode> kJointModes[] = {
 const char* const kAssetKinds[] = {"tree", "panel", "cube", "rod", "small_wall", "wall", "thin", "sphere", "mesh"};
 const char* const kTerrains[] = {"plane", "heightfield", "trimesh"};
 const char* const kNavigationActionSpaces[] = {"forward_inclination", "velocity"};
+const char* const kNavigationImageEncodings[] = {"range", "proximity"};
 const char* const kNoiseModels[] = {"none", "range_dependent", "multiplier"};
 const char* const kPickPlaceActionModes[] = {"joint_position", "ee_delta"};
 
@@ -328,6 +329,10 @@ const Schema<RobotConfig>& robot_schema() {
       vec3_f<S>("min_init_position_ratio", &S::min_init_position_ratio, "", "start drawn in [min, max] x (upper - lower) from the lower bound"),
       vec3_f<S>("max_init_position_ratio", &S::max_init_position_ratio, "", ""),
       real_f<S>("max_init_yaw_rad", &S::max_init_yaw_rad, "rad", 0, static_cast<double>(kPi), "start yaw drawn in [-max, max]"),
+      real_f<S>("max_init_linvel_m_s", &S::max_init_linvel_m_s, "m/s", 0, 100,
+                "start velocity, each world-frame component drawn in [-max, max] (0: at rest)"),
+      real_f<S>("max_init_angvel_rad_s", &S::max_init_angvel_rad_s, "rad/s", 0, 100,
+                "start angular rate, each world-frame component drawn in [-max, max] (0: none)"),
       bool_f<S>("use_desaturation", &S::use_desaturation, "sequential desaturation (false: Aerial Gym's clamped pseudo-inverse)"),
       real_f<S>("joint_kp_Nm_rad", &S::joint_kp_Nm_rad, "N m/rad", 0, 1e5, "articulated: joint PD stiffness"),
       real_f<S>("joint_kd_Nms_rad", &S::joint_kd_Nms_rad, "N m s/rad", 0, 1e4, "articulated: joint PD damping"),
@@ -444,6 +449,12 @@ const Schema<NavigationConfig>& navigation_schema() {
       real_f<S>("max_yaw_rate_rad_s", &S::max_yaw_rate_rad_s, "rad/s", 0, 100, "actions [-1, 1] x this: the yaw-rate command"),
       int_f<S>("pool_rows", &S::pool_rows, 1, 64, nullptr, "range image min-pooled to pool_rows x pool_cols observation cells"),
       int_f<S>("pool_cols", &S::pool_cols, 1, 64, nullptr, ""),
+      choice_f<S>(
+          "image_encoding", "range, proximity",
+          [](S& s, const std::string& v) { return set_enum(kNavigationImageEncodings, v, s.image_encoding); },
+          [](const S& s) { return enum_name(kNavigationImageEncodings, s.image_encoding); },
+          "an image cell for its nearest range r: range, r / max range (the reference's scale); proximity, 1 / (1 + r / proximity_scale_m)"),
+      real_f<S>("proximity_scale_m", &S::proximity_scale_m, "m", 1e-3, 100, "proximity: the range whose cell reads 0.5"),
   };
   static const StructuralKey st[] = {{"reward", "the reward's constants (section task.navigation.reward)"}};
   static const Schema<S> s{"task.navigation", "navigation_task's actions, image observation and reward", f, std::size(f), st,

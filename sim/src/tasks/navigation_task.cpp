@@ -198,6 +198,7 @@ class NavigationTask final : public Task {
     err_prev_.assign(n * 3, 0.0f);
     action_.assign(n * kNavActionDim, 0.0f);
     action_prev_.assign(n * kNavActionDim, 0.0f);
+    range_cells_.assign(static_cast<std::size_t>(p_.pool_rows * p_.pool_cols), 0.0f);
     flat_ = sim_->holds_altitude();
     const RangeImage img = sim_->range_image(0, 0);
     scan_ = img.height == 1;
@@ -263,12 +264,20 @@ class NavigationTask final : public Task {
   }
 
   // nav::scripted_action on every environment's observation row (a scan: its forward sectors).
+  // Its thresholds are fractions of the sensor's range: under the proximity encoding it reads the
+  // image pooled again in range cells.
   bool scripted_actions(float* actions) const override {
+    const bool pooled_again = p_.image_encoding != NavigationImageEncoding::range;
     for (int env = 0; env < num_envs_; ++env) {
       const float* o = &obs_[static_cast<std::size_t>(env) * static_cast<std::size_t>(obs_dim_)];
+      const float* img = o + kNavStateObs;
+      if (pooled_again) {
+        task_support::pool_image(sim_->range_image(env, 0), p_.pool_rows, p_.pool_cols, range_cells_.data());
+        img = range_cells_.data();
+      }
       float cmd[kNavActionDim];
-      if (scan_) nav::scripted_action(o, o + kNavStateObs + view_begin_, 1, view_end_ - view_begin_, false, cmd);
-      else nav::scripted_action(o, o + kNavStateObs, p_.pool_rows, p_.pool_cols, !flat_, cmd);
+      if (scan_) nav::scripted_action(o, img + view_begin_, 1, view_end_ - view_begin_, false, cmd);
+      else nav::scripted_action(o, img, p_.pool_rows, p_.pool_cols, !flat_, cmd);
       if (flat_) cmd[2] = 0.0f;
       nav::command_to_action(cmd, p_, actions + static_cast<std::size_t>(env) * static_cast<std::size_t>(action_dim_));
     }
@@ -305,7 +314,11 @@ class NavigationTask final : public Task {
     for (int k = 0; k < 3; ++k) w_b[k] = static_cast<float>(sim_->base_ang_vel_b()[3 * i + k]);
     const real* eul = sim_->base_euler_xyz() + 3 * i;  // ssa: wrapped to [-pi, pi)
     nav::write_state_obs(e_v, static_cast<float>(eul[0]), static_cast<float>(eul[1]), v_b, w_b, &action_[i * kNavActionDim], o);
-    task_support::pool_image(sim_->range_image(env, 0), p_.pool_rows, p_.pool_cols, o + kNavStateObs);
+    const RangeImage img = sim_->range_image(env, 0);
+    task_support::pool_image(img, p_.pool_rows, p_.pool_cols, o + kNavStateObs);
+    if (p_.image_encoding == NavigationImageEncoding::proximity)
+      policy::proximity_from_range_cells(o + kNavStateObs, p_.pool_rows * p_.pool_cols, static_cast<float>(img.max_range_m),
+                                         p_.proximity_scale_m);
   }
 
   NavigationParams p_;
@@ -314,6 +327,7 @@ class NavigationTask final : public Task {
   float success_radius_m_ = 1.0f;
   nav::EpisodeBook book_;
   std::vector<float> err_prev_, action_, action_prev_;
+  mutable std::vector<float> range_cells_;  // scripted_actions' scratch (the image in range cells)
 };
 
 }  // namespace
@@ -338,8 +352,9 @@ std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const Navi
     return nullptr;
   }
   if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || !(params.max_inclination_rad >= 0) ||
-      params.pool_rows < 1 || params.pool_cols < 1) {
-    error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, max_inclination_rad >= 0, pool_rows and pool_cols >= 1";
+      params.pool_rows < 1 || params.pool_cols < 1 || !(params.proximity_scale_m > 0)) {
+    error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, max_inclination_rad >= 0, pool_rows and pool_cols >= 1, "
+                  "proximity_scale_m > 0";
     return nullptr;
   }
   WorldConfig wc = config;
@@ -375,6 +390,14 @@ TaskConfig navigation_task_config() {
 TaskDefaults navigation_task_defaults() {
   TaskDefaults d;
   d.env = "env_with_obstacles";
+  // The reference's start (the robot config's init_config, base_quad_config.py and lmf2_config.py
+  // alike; robot_asset.min/max_state_ratio is not read for the robot): within x 0.1-0.2, y and z
+  // 0.15-0.85 of the bounds, facing the goal's end of the environment within +-pi/6, each
+  // velocity component in +-0.2 m/s and each angular rate in +-0.2 rad/s. The registered
+  // base_quadrotor starts anywhere in y and z 0.1-0.9, facing any way, at rest.
+  d.robot =
+      "{name: base_quadrotor, min_init_position_ratio: [0.1, 0.15, 0.15], max_init_position_ratio: [0.2, 0.85, 0.85], "
+      "max_init_yaw_rad: 0.5235987755982988, max_init_linvel_m_s: 0.2, max_init_angvel_rad_s: 0.2}";
   d.controller = "lee_velocity_control";
   d.sensors = {{"vl53l5cx", 1}};
   return d;

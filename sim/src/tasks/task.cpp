@@ -257,6 +257,8 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
     p.max_yaw_rate_rad_s = static_cast<float>(nc.max_yaw_rate_rad_s);
     p.pool_rows = nc.pool_rows;
     p.pool_cols = nc.pool_cols;
+    p.image_encoding = nc.image_encoding;
+    p.proximity_scale_m = static_cast<float>(nc.proximity_scale_m);
     p.reward = nc.reward;
     p.curriculum = config.task.curriculum;
     return make_navigation_task(config, p, backend, error);

@@ -3,7 +3,9 @@
 // curriculum moving with the success rate, no heap in step, thread-count independence.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "heap_counter.hpp"
@@ -407,6 +409,108 @@ TEST(NavigationTask, ErrorsAndScenario) {
   ASSERT_TRUE(t) << err;
   EXPECT_STREQ(t->name(), "navigation_task");
   EXPECT_EQ(t->num_envs(), 3);
+}
+
+// A scenario naming only the task starts its robots as the reference does (the init_config of
+// Aerial Gym's robot configs): x 0.1-0.2 and y, z 0.15-0.85 of the bounds, yaw within +-pi/6,
+// each world-frame velocity component and angular rate within +-0.2. A robot section of the
+// scenario's own replaces that start: the registered base_quadrotor faces any way, at rest.
+TEST(NavigationTask, StartsAsTheReferenceUnlessTheScenarioNamesARobot) {
+  constexpr int kEnvs = 64;
+  const std::string env = "env: {name: env_with_obstacles, num_envs: 64}\n";
+  for (const bool own_robot : {false, true}) {
+    std::string err;
+    WorldConfig s;
+    ASSERT_TRUE(load_scenario_string(std::string("task: navigation_task\n") + (own_robot ? "robot: base_quadrotor\n" : "") + env,
+                                     "nav.yaml", s, err))
+        << err;
+    auto t = make_task(s, err);
+    ASSERT_TRUE(t) << err;
+    const World& w = world_of(*t);
+    real max_yaw = 0, max_v = 0, max_w = 0;
+    int checked = 0;
+    for (int e = 0; e < kEnvs; ++e) {
+      const RigidBodyState& st = w.robot_state(e, 0);
+      const Quat& q = st.orientation_wb;
+      max_yaw = std::max(max_yaw, std::fabs(std::atan2(2 * (q.w() * q.z() + q.x() * q.y()), 1 - 2 * (q.y() * q.y() + q.z() * q.z()))));
+      const Vec3 w_w = rotate(q, st.angvel_b);
+      max_v = std::max(max_v, st.linvel_w.cwiseAbs().maxCoeff());
+      max_w = std::max(max_w, w_w.cwiseAbs().maxCoeff());
+      if (own_robot || w.data().episode_fallback[static_cast<std::size_t>(e)] != 0) continue;
+      const Vec3 lo = w.data().lower_w[e], hi = w.data().upper_w[e];
+      const Vec3 ratio = (st.position_w - lo).cwiseQuotient(hi - lo);
+      EXPECT_GE(ratio[0], 0.1_r - 1e-5_r) << e;
+      EXPECT_LE(ratio[0], 0.2_r + 1e-5_r) << e;
+      for (int k = 1; k < 3; ++k) {
+        EXPECT_GE(ratio[k], 0.15_r - 1e-5_r) << e << " axis " << k;
+        EXPECT_LE(ratio[k], 0.85_r + 1e-5_r) << e << " axis " << k;
+      }
+      ++checked;
+    }
+    if (own_robot) {
+      EXPECT_GT(max_yaw, 1.5_r);  // 64 draws in +-pi
+      EXPECT_EQ(max_v, 0_r);
+      EXPECT_EQ(max_w, 0_r);
+    } else {
+      EXPECT_EQ(s.robot.name, "base_quadrotor");
+      EXPECT_GT(checked, kEnvs / 2);
+      EXPECT_GT(max_yaw, 0.4_r);
+      EXPECT_LE(max_yaw, static_cast<real>(kPi / 6) + 1e-5_r);
+      EXPECT_GT(max_v, 0.15_r);
+      EXPECT_LE(max_v, 0.2_r);
+      EXPECT_GT(max_w, 0.15_r);
+      EXPECT_LE(max_w, 0.2_r + 1e-5_r);
+    }
+  }
+  std::string err;
+  WorldConfig s;
+  EXPECT_FALSE(load_scenario_string("robot: {name: base_quadrotor, max_init_linvel_m_s: -0.2}\n", "nav.yaml", s, err));
+  EXPECT_NE(err.find("robot.max_init_linvel_m_s"), std::string::npos) << err;
+}
+
+// task.navigation.image_encoding proximity: the same run as the range encoding (the state, the
+// rewards, the scripted actions, which read range cells either way), each image cell the
+// proximity 1 / (1 + r / scale) of the range cell's r; an unknown encoding is refused by name.
+TEST(NavigationTask, ProximityEncodingOfTheImage) {
+  std::string err;
+  std::unique_ptr<Task> t[2];
+  for (int k = 0; k < 2; ++k) {
+    WorldConfig s;
+    ASSERT_TRUE(load_scenario_string(std::string("task: {name: navigation_task, navigation: {image_encoding: ") + (k ? "proximity" : "range") +
+                                         ", proximity_scale_m: 0.4}}\nenv: {name: env_with_obstacles, num_envs: 4}\n",
+                                     "nav.yaml", s, err))
+        << err;
+    t[k] = make_task(s, err);
+    ASSERT_TRUE(t[k]) << err;
+  }
+  const int od = t[0]->obs_dim(), n = t[0]->num_envs();
+  ASSERT_EQ(t[1]->obs_dim(), od);
+  const float max_range = static_cast<float>(t[0]->simulator().range_image(0, 0).max_range_m);
+  std::vector<float> a0(static_cast<std::size_t>(n * t[0]->action_dim())), a1(a0.size());
+  int near_cells = 0;
+  for (int step = 0; step < 40; ++step) {
+    ASSERT_TRUE(t[0]->scripted_actions(a0.data()));
+    ASSERT_TRUE(t[1]->scripted_actions(a1.data()));
+    ASSERT_EQ(a0, a1) << step;
+    for (int e = 0; e < n; ++e) {
+      const float* o0 = t[0]->observations() + e * od;
+      const float* o1 = t[1]->observations() + e * od;
+      for (int c = 0; c < 17; ++c) ASSERT_EQ(o0[c], o1[c]) << step << " " << e << " " << c;
+      for (int c = 17; c < od; ++c) {
+        const float want = 1.0f / (1.0f + o0[c] * (max_range / 0.4f));
+        ASSERT_NEAR(o1[c], want, 1e-6f) << step << " " << e << " " << c;
+        near_cells += o1[c] > 0.2f;  // nearer than 1.6 m
+      }
+      ASSERT_EQ(t[0]->rewards()[e], t[1]->rewards()[e]);
+    }
+    t[0]->step(a0.data());
+    t[1]->step(a1.data());
+  }
+  EXPECT_GT(near_cells, 0);
+  WorldConfig s;
+  EXPECT_FALSE(load_scenario_string("task: {name: navigation_task, navigation: {image_encoding: inverse}}\n", "nav.yaml", s, err));
+  EXPECT_NE(err.find("task.navigation.image_encoding"), std::string::npos) << err;
+  EXPECT_NE(err.find("range, proximity"), std::string::npos) << err;
 }
 
 // task.curriculum from a scenario file: a level held fixed at the top (an evaluation there), and a

@@ -82,6 +82,14 @@ inline void navigation_state_observation(const float e_v[3], float roll, float p
   for (int k = 0; k < kNavigationActionDim; ++k) o[13 + k] = action[k];
 }
 
+/// Cells of min_pool_ranges (each a range over max_range_m, in [0, 1]) rewritten in place as the
+/// proximities 1 / (1 + r / scale_m) of their ranges r (navigation_task's image_encoding
+/// proximity): 1 at contact, 0.5 at scale_m, 1 / (1 + max_range_m / scale_m) for no return.
+inline void proximity_from_range_cells(float* cells, int n, float max_range_m, float scale_m) {
+  const float k = max_range_m / scale_m;
+  for (int i = 0; i < n; ++i) cells[i] = 1.0f / (1.0f + cells[i] * k);
+}
+
 /// The image part: a range image (row r, column c at ranges[r * row_step + c * col_step]) min-pooled
 /// into rows x cols cells, each the nearest valid range of its block over max_range_m, at most 1
 /// (negative and NaN ranges are no return; an empty block reads 1). Aerial Gym pools its depth

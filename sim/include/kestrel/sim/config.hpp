@@ -194,6 +194,11 @@ struct RobotConfig {
   Vec3 min_init_position_ratio = Vec3(0.1_r, 0.1_r, 0.1_r);
   Vec3 max_init_position_ratio = Vec3(0.2_r, 0.9_r, 0.9_r);
   real max_init_yaw_rad = kPi;
+  // Start velocities: each world-frame velocity component drawn in [-max, max] m/s and each
+  // world-frame angular rate in [-max, max] rad/s (Aerial Gym's init_config draws both in +-0.2).
+  // 0: a start at rest and no draws, so the reset streams of other scenes are unchanged.
+  real max_init_linvel_m_s = 0;
+  real max_init_angvel_rad_s = 0;
   bool use_desaturation = true;  // sequential desaturation; false: Aerial Gym's clamped pinv
   std::vector<SensorConfig> sensors;  // none by default: the default run renders nothing
   // kind articulated: the robot file (MJCF or URDF, sim/articulated_robot.hpp) and its joint drive,
@@ -282,6 +287,12 @@ struct NavigationRewardParams {
 /// down by a1 x max_inclination_rad, and a2 x max_yaw_rate_rad_s; never sideways or backwards, so
 /// the vehicle moves where its forward sensor looks. velocity: 4 actions, each x its maximum.
 enum class NavigationActionSpace : std::uint8_t { forward_inclination = 0, velocity };
+/// What each image cell of navigation_task's observation holds for the nearest range r (m) of its
+/// block. range: r / max_range_m in [0, 1] (1: nothing within range). proximity: 1 / (1 + r /
+/// proximity_scale_m), 1 at contact and falling off with distance, so that the ranges an
+/// avoidance decision turns on (a few tenths of a metre to two metres) span most of [0, 1]
+/// instead of its bottom fifth (the reference feeds its depth image through a VAE instead).
+enum class NavigationImageEncoding : std::uint8_t { range = 0, proximity };
 /// navigation_task's action scaling, image pooling and reward (task.navigation).
 struct NavigationConfig {
   NavigationActionSpace action_space = NavigationActionSpace::forward_inclination;
@@ -289,6 +300,8 @@ struct NavigationConfig {
   real max_inclination_rad = 0.78539816f; // pi / 4 (forward_inclination)
   real max_yaw_rate_rad_s = 1.0471976f;   // pi / 3
   int pool_rows = 8, pool_cols = 8;       // the range image min-pooled to rows x cols cells
+  NavigationImageEncoding image_encoding = NavigationImageEncoding::range;
+  real proximity_scale_m = 0.5f;          // proximity: the range that reads 0.5
   NavigationRewardParams reward;
 };
 

@@ -64,6 +64,8 @@ struct NavigationParams {
   float max_inclination_rad = 0.78539816f;  // pi / 4
   float max_yaw_rate_rad_s = 1.0471976f;  // pi / 3
   int pool_rows = 8, pool_cols = 8;
+  NavigationImageEncoding image_encoding = NavigationImageEncoding::range;  // sim/config.hpp
+  float proximity_scale_m = 0.5f;
   NavigationRewardParams reward;
   NavigationCurriculum curriculum;
 };

@@ -182,6 +182,8 @@ std::string rl_task_ids_joined();
 /// Registry names a scenario (or `kestrel run --task ID`) uses for the sections it does not give,
 /// when its task is an RL task: the task's own sim, env, robot, controller and sensors.
 struct TaskDefaults {
+  // robot: a registered robot's name, or a YAML map of one with fields set (`{name: base_quadrotor,
+  // max_init_yaw_rad: 0.52}`), as a scenario's robot section reads.
   std::string sim = "base_sim", env = "empty", robot = "base_quadrotor", controller = "lee_position_control";
   std::vector<std::pair<std::string, int>> sensors;  // (sensor registry name, every_env_steps)
 };
