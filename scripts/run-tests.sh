@@ -13,7 +13,10 @@ cd "$(dirname "$0")/.."
 ./scripts/deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 
-stage() { echo "== $1 (at $(( $(date +%s) - start )) s)"; }
+# Each stage also prints the disk space left: the build trees and .venv take about 9 GB together
+# (a CI run once stopped at the AddressSanitizer link with "No space left on device").
+free_mb() { df -Pm . | awk 'NR == 2 { print $4 }'; }
+stage() { echo "== $1 (at $(( $(date +%s) - start )) s, $(free_mb) MB free)"; }
 stage "host + Cortex-M4F + RISC-V rv32imac/rv32imafc (QEMU)"
 cmake --preset host
 cmake --build --preset host -j "$jobs"

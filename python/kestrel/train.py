@@ -503,10 +503,19 @@ _TASK_DEFAULTS: dict[str, dict] = {
     #   avoidance decision turns on, lay in the bottom fifth of [0, 1]: with the reference's start
     #   (the task's default since stop 37), 69.3 % / 29.4 % crashes against 60.5 % / 39.3 % on the
     #   final 1024 episodes (runs/nav px and sp in navigation_sweep.csv).
+    # - training and evaluation (stop 38): the images of 10 and 20 env-steps before after the
+    #   current one (task.navigation.image_history_frames 2, lag 10: two and four sensor frames
+    #   back), so that the feed-forward policy sees which way an obstacle moves in its view;
+    #   prototyped around the vector env in stop 37 (a wrapper since removed, run ph3):
+    #   78.2 % / 19.8 % against 69.1 % / 30.3 % on the final 1024 episodes. A crash at -1000
+    #   (training only) alone gave 73.3 % / 25.2 % (run c1000), with the history 67.3 % / 28.9 %
+    #   (run hc): not kept.
     "Kestrel-Navigation-v0": {"envs": 256, "steps": 32_000_000, "eval_every": 4_000_000, "rollout": 24,
                               "gamma": 0.98, "obs_norm": 1, "squash": 1, "action_repeat": 5, "init_std": 1.0,
                               "hidden": "256,256", "sensors": NAV_ZONE_SENSOR,
-                              "task_set": json.dumps({"navigation": {"image_encoding": "proximity", "proximity_scale_m": 0.5}}),
+                              "task_set": json.dumps({"navigation": {"image_encoding": "proximity", "proximity_scale_m": 0.5,
+                                                                     "image_history_frames": 2,
+                                                                     "image_history_lag_env_steps": 10}}),
                               "train_task_set": json.dumps({"curriculum": {"success_rate_for_increase": 0.4,
                                                                            "success_rate_for_decrease": 0.25},
                                                             "navigation": {"reward": {

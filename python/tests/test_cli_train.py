@@ -162,7 +162,7 @@ def test_sensors_replace_the_task_sensors(tmp_path):
 
 
 def test_navigation_trains_and_evaluates_on_proximity_cells_unless_told_otherwise(tmp_path):
-    # Kestrel-Navigation-v0's default --task-set: image cells as proximities, in training and in the
+    # Kestrel-Navigation-v0's default --task-set: image cells as proximities (and two earlier images), in training and in the
     # evaluations (the observation the policy is trained on); a --task-set of one's own replaces it.
     import json
 
@@ -178,7 +178,11 @@ def test_navigation_trains_and_evaluates_on_proximity_cells_unless_told_otherwis
     envs = [make_vec("Kestrel-Navigation-v0", num_envs=3, seed=4, threads=1, sensors=json.loads(s["sensors"]), **t)
             for t in ({"task": task_set}, {})]
     near, ranged = (e.reset(seed=4)[0][:, 17:] for e in envs)
-    np.testing.assert_allclose(near, 1.0 / (1.0 + ranged * (10.0 / 0.5)), rtol=1e-6)
+    # The default also appends two earlier images (image_history_frames 2), at a reset the first one.
+    assert task_set["navigation"]["image_history_frames"] == 2 and near.shape[1] == 3 * ranged.shape[1] == 3 * 64
+    np.testing.assert_allclose(near[:, :64], 1.0 / (1.0 + ranged * (10.0 / 0.5)), rtol=1e-6)
+    np.testing.assert_array_equal(near[:, 64:128], near[:, :64])
+    np.testing.assert_array_equal(near[:, 128:], near[:, :64])
     s = main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "40", "--eval-every", "40", "--eval-episodes", "2",
               "--episode-len", "10", "--threads", "1", "--out", str(tmp_path / "own"), "--quiet", "--export", "0",
               "--task-set", '{"navigation": {"pool_rows": 4}}'])

@@ -51,6 +51,32 @@ KTEST(PolicyObservations, MinPoolingOfAStridedImage) {
   KEXPECT_EQ(all[0], 1.0f);
 }
 
+KTEST(PolicyObservations, FrameHistory) {
+  // Two earlier frames 2 steps apart: 5 slots. Frame t holds {t, 10 t}.
+  constexpr int kCells = 2, kFrames = 2, kLag = 2;
+  const int span = pl::frame_history_span(kFrames, kLag);
+  KEXPECT_EQ(span, 5);
+  float ring[5 * kCells];
+  const float first[kCells] = {0.0f, 0.0f};
+  pl::frame_history_fill(ring, span, kCells, first);
+  int head = 0;
+  float out[kFrames * kCells];
+  for (int t = 1; t <= 12; ++t) {
+    head = pl::frame_history_advance(span, head);
+    KEXPECT_TRUE(head >= 0 && head < span);
+    ring[head * kCells] = static_cast<float>(t);
+    ring[head * kCells + 1] = 10.0f * static_cast<float>(t);
+    KEXPECT_EQ(pl::frame_history_at(ring, span, kCells, head, 0)[0], static_cast<float>(t));
+    pl::frame_history_write(ring, span, kCells, head, kFrames, kLag, out);
+    // lag and 2 lag steps before, or the first frame (0) before the history began.
+    for (int j = 1; j <= kFrames; ++j) {
+      const float want = t - j * kLag > 0 ? static_cast<float>(t - j * kLag) : 0.0f;
+      KEXPECT_EQ(out[(j - 1) * kCells], want);
+      KEXPECT_EQ(out[(j - 1) * kCells + 1], 10.0f * want);
+    }
+  }
+}
+
 KTEST(PolicyObservations, ProximityCells) {
   // Range cells of a 10 m sensor as proximities with scale 0.5 m: contact 1, 0.5 m reads 0.5,
   // 2 m reads 0.2, no return (10 m) 1 / 21.

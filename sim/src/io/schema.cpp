@@ -455,6 +455,10 @@ const Schema<NavigationConfig>& navigation_schema() {
           [](const S& s) { return enum_name(kNavigationImageEncodings, s.image_encoding); },
           "an image cell for its nearest range r: range, r / max range (the reference's scale); proximity, 1 / (1 + r / proximity_scale_m)"),
       real_f<S>("proximity_scale_m", &S::proximity_scale_m, "m", 1e-3, 100, "proximity: the range whose cell reads 0.5"),
+      int_f<S>("image_history_frames", &S::image_history_frames, 0, 16, nullptr,
+               "earlier images appended after the current one (0: none); a new episode's are its first image"),
+      int_f<S>("image_history_lag_env_steps", &S::image_history_lag_env_steps, 1, 1000, nullptr,
+               "env-steps between the current image and the first earlier one, and between earlier ones"),
   };
   static const StructuralKey st[] = {{"reward", "the reward's constants (section task.navigation.reward)"}};
   static const Schema<S> s{"task.navigation", "navigation_task's actions, image observation and reward", f, std::size(f), st,

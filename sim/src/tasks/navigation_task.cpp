@@ -62,7 +62,9 @@ int next_curriculum_level(const NavigationCurriculum& c, double success_rate, in
   return std::min(std::max(level, c.min_level), c.max_level);
 }
 
-int navigation_obs_dim(const NavigationParams& p) { return kNavStateObs + p.pool_rows * p.pool_cols; }
+int navigation_obs_dim(const NavigationParams& p) {
+  return kNavStateObs + (1 + p.image_history_frames) * p.pool_rows * p.pool_cols;
+}
 
 int navigation_action_dim(const NavigationParams& p) { return p.action_space == NavigationActionSpace::velocity ? 4 : 3; }
 
@@ -199,6 +201,12 @@ class NavigationTask final : public Task {
     action_.assign(n * kNavActionDim, 0.0f);
     action_prev_.assign(n * kNavActionDim, 0.0f);
     range_cells_.assign(static_cast<std::size_t>(p_.pool_rows * p_.pool_cols), 0.0f);
+    // The image memory: one ring of span frames per environment (span 1 without a history, the
+    // current image only), written once per env-step in step() and at a reset, read by write_obs.
+    cells_ = p_.pool_rows * p_.pool_cols;
+    span_ = p_.image_history_frames > 0 ? policy::frame_history_span(p_.image_history_frames, p_.image_history_lag_env_steps) : 1;
+    frames_.assign(n * static_cast<std::size_t>(span_) * static_cast<std::size_t>(cells_), 0.0f);
+    head_.assign(n, 0);
     flat_ = sim_->holds_altitude();
     const RangeImage img = sim_->range_image(0, 0);
     scan_ = img.height == 1;
@@ -238,6 +246,8 @@ class NavigationTask final : public Task {
     for (int env = 0; env < num_envs_; ++env) {
       const std::size_t i = static_cast<std::size_t>(env);
       ++episode_step_[i];
+      head_[i] = policy::frame_history_advance(span_, head_[i]);
+      encode_image(env, ring(env) + static_cast<std::size_t>(head_[i]) * static_cast<std::size_t>(cells_));
       float e_v[3];
       error_vehicle(env, e_v);
       const bool crash = crash_or_out(env);
@@ -303,6 +313,21 @@ class NavigationTask final : public Task {
     const std::size_t i = static_cast<std::size_t>(env);
     for (int k = 0; k < kNavActionDim; ++k) action_[i * kNavActionDim + k] = action_prev_[i * kNavActionDim + k] = 0;
     error_vehicle(env, &err_prev_[i * 3]);  // the first "getting closer" of an episode is from its start
+    // A new episode's image history is its first image (nothing of the last episode's).
+    float* r = ring(env);
+    head_[i] = 0;
+    encode_image(env, r);
+    policy::frame_history_fill(r, span_, cells_, r);
+  }
+
+  float* ring(int env) { return &frames_[static_cast<std::size_t>(env) * static_cast<std::size_t>(span_) * static_cast<std::size_t>(cells_)]; }
+
+  // The observation's image cells of the robot's first range image now: min-pooled, then encoded.
+  void encode_image(int env, float* cells) const {
+    const RangeImage img = sim_->range_image(env, 0);
+    task_support::pool_image(img, p_.pool_rows, p_.pool_cols, cells);
+    if (p_.image_encoding == NavigationImageEncoding::proximity)
+      policy::proximity_from_range_cells(cells, cells_, static_cast<float>(img.max_range_m), p_.proximity_scale_m);
   }
 
   void write_obs(int env) override {
@@ -314,11 +339,12 @@ class NavigationTask final : public Task {
     for (int k = 0; k < 3; ++k) w_b[k] = static_cast<float>(sim_->base_ang_vel_b()[3 * i + k]);
     const real* eul = sim_->base_euler_xyz() + 3 * i;  // ssa: wrapped to [-pi, pi)
     nav::write_state_obs(e_v, static_cast<float>(eul[0]), static_cast<float>(eul[1]), v_b, w_b, &action_[i * kNavActionDim], o);
-    const RangeImage img = sim_->range_image(env, 0);
-    task_support::pool_image(img, p_.pool_rows, p_.pool_cols, o + kNavStateObs);
-    if (p_.image_encoding == NavigationImageEncoding::proximity)
-      policy::proximity_from_range_cells(o + kNavStateObs, p_.pool_rows * p_.pool_cols, static_cast<float>(img.max_range_m),
-                                         p_.proximity_scale_m);
+    // The image of the last env-step (or of the reset), then the earlier ones.
+    const float* r = ring(env);
+    const float* now = policy::frame_history_at(r, span_, cells_, head_[i], 0);
+    std::copy(now, now + cells_, o + kNavStateObs);
+    policy::frame_history_write(r, span_, cells_, head_[i], p_.image_history_frames, p_.image_history_lag_env_steps,
+                                o + kNavStateObs + cells_);
   }
 
   NavigationParams p_;
@@ -328,6 +354,9 @@ class NavigationTask final : public Task {
   nav::EpisodeBook book_;
   std::vector<float> err_prev_, action_, action_prev_;
   mutable std::vector<float> range_cells_;  // scripted_actions' scratch (the image in range cells)
+  int cells_ = 0, span_ = 1;
+  std::vector<float> frames_;  // per environment: span_ frames of cells_ (policy::frame_history_*)
+  std::vector<int> head_;      // per environment: the newest frame's slot
 };
 
 }  // namespace
@@ -352,9 +381,10 @@ std::unique_ptr<Task> make_navigation_task(const WorldConfig& config, const Navi
     return nullptr;
   }
   if (!(params.max_speed_m_s > 0) || !(params.max_yaw_rate_rad_s >= 0) || !(params.max_inclination_rad >= 0) ||
-      params.pool_rows < 1 || params.pool_cols < 1 || !(params.proximity_scale_m > 0)) {
+      params.pool_rows < 1 || params.pool_cols < 1 || !(params.proximity_scale_m > 0) || params.image_history_frames < 0 ||
+      params.image_history_frames > 16 || params.image_history_lag_env_steps < 1 || params.image_history_lag_env_steps > 1000) {
     error = pre + "expected max_speed_m_s > 0, max_yaw_rate_rad_s >= 0, max_inclination_rad >= 0, pool_rows and pool_cols >= 1, "
-                  "proximity_scale_m > 0";
+                  "proximity_scale_m > 0, image_history_frames 0-16, image_history_lag_env_steps 1-1000";
     return nullptr;
   }
   WorldConfig wc = config;

@@ -259,6 +259,8 @@ std::unique_ptr<Task> make_task(const WorldConfig& config, Backend backend, std:
     p.pool_cols = nc.pool_cols;
     p.image_encoding = nc.image_encoding;
     p.proximity_scale_m = static_cast<float>(nc.proximity_scale_m);
+    p.image_history_frames = nc.image_history_frames;
+    p.image_history_lag_env_steps = nc.image_history_lag_env_steps;
     p.reward = nc.reward;
     p.curriculum = config.task.curriculum;
     return make_navigation_task(config, p, backend, error);

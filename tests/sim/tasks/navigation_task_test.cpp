@@ -513,6 +513,74 @@ TEST(NavigationTask, ProximityEncodingOfTheImage) {
   EXPECT_NE(err.find("range, proximity"), std::string::npos) << err;
 }
 
+// task.navigation.image_history_frames: after the task's own observation (the same bits as without
+// a history, which changes nothing else), the image cells of lag and 2 lag env-steps before, the
+// episode's first image where the episode is younger; a reset environment's history is its new
+// first image. Checked against the observations recorded along the way, across auto-resets.
+TEST(NavigationTask, ImageHistoryOfEarlierFrames) {
+  constexpr int kFrames = 2, kLag = 3;
+  std::string err;
+  std::unique_ptr<Task> t[2];
+  for (int k = 0; k < 2; ++k) {
+    WorldConfig s;
+    ASSERT_TRUE(load_scenario_string(std::string("task: {name: navigation_task, episode_len_env_steps: 25, navigation: {image_encoding: proximity") +
+                                         (k ? ", image_history_frames: 2, image_history_lag_env_steps: 3" : "") +
+                                         "}}\nenv: {name: env_with_obstacles, num_envs: 4}\n",
+                                     "nav.yaml", s, err))
+        << err;
+    EXPECT_EQ(s.task.navigation.image_history_frames, k ? kFrames : 0);
+    t[k] = make_task(s, err);
+    ASSERT_TRUE(t[k]) << err;
+  }
+  const int od = t[0]->obs_dim(), n = t[0]->num_envs(), cells = od - 17;
+  ASSERT_EQ(cells, 64);
+  ASSERT_EQ(t[1]->obs_dim(), od + kFrames * cells);
+  const int hd = t[1]->obs_dim();
+  std::vector<std::vector<float>> images;  // per env-step: every environment's current image
+  std::vector<int> start(static_cast<std::size_t>(n), 0);  // the env-step each env's episode began
+  std::vector<float> a0(static_cast<std::size_t>(n * t[0]->action_dim())), a1(a0.size());
+  int resets = 0, moved = 0;
+  for (int step = 0; step < 60; ++step) {
+    std::vector<float> now(static_cast<std::size_t>(n * cells));
+    for (int e = 0; e < n; ++e) {
+      const float* o0 = t[0]->observations() + e * od;
+      const float* o1 = t[1]->observations() + e * hd;
+      for (int c = 0; c < od; ++c) ASSERT_EQ(o0[c], o1[c]) << step << " " << e << " " << c;
+      std::copy(o1 + 17, o1 + od, now.begin() + e * cells);
+    }
+    images.push_back(now);
+    for (int e = 0; e < n; ++e) {
+      const float* o1 = t[1]->observations() + e * hd;
+      for (int j = 1; j <= kFrames; ++j) {
+        const int then = std::max(step - j * kLag, start[static_cast<std::size_t>(e)]);
+        moved += then != step;
+        for (int c = 0; c < cells; ++c)
+          ASSERT_EQ(o1[od + (j - 1) * cells + c], images[static_cast<std::size_t>(then)][static_cast<std::size_t>(e * cells + c)])
+              << step << " " << e << " " << j << " " << c;
+      }
+    }
+    ASSERT_TRUE(t[0]->scripted_actions(a0.data()));
+    ASSERT_TRUE(t[1]->scripted_actions(a1.data()));
+    ASSERT_EQ(a0, a1) << step;
+    t[0]->step(a0.data());
+    t[1]->step(a1.data());
+    for (int e = 0; e < n; ++e) {
+      ASSERT_EQ(t[0]->rewards()[e], t[1]->rewards()[e]);
+      if (t[1]->terminations()[e] || t[1]->truncations()[e]) {
+        start[static_cast<std::size_t>(e)] = step + 1;
+        ++resets;
+      }
+    }
+  }
+  EXPECT_GT(resets, 2);
+  EXPECT_GT(moved, 0);
+  // The images differ along the way: the comparison above could tell frames apart.
+  EXPECT_NE(images[1], images[20]);
+  WorldConfig s;
+  EXPECT_FALSE(load_scenario_string("task: {name: navigation_task, navigation: {image_history_frames: 17}}\n", "nav.yaml", s, err));
+  EXPECT_NE(err.find("task.navigation.image_history_frames"), std::string::npos) << err;
+}
+
 // task.curriculum from a scenario file: a level held fixed at the top (an evaluation there), and a
 // curriculum that cannot hold refused with the section, the fields and the values.
 TEST(NavigationTask, CurriculumFromTheScenario) {

@@ -90,6 +90,40 @@ inline void proximity_from_range_cells(float* cells, int n, float max_range_m, f
   for (int i = 0; i < n; ++i) cells[i] = 1.0f / (1.0f + cells[i] * k);
 }
 
+/// A memory of earlier frames of an observation part (navigation_task's image history): a ring of
+/// `span` slots of `cells` floats in caller storage (a static array on an MCU, one row per
+/// environment in the simulator), slot `head` the newest. A feed-forward policy that sees the
+/// image of now and of `lag`, 2 `lag`, ... env-steps before can tell an obstacle it is turning
+/// away from from one it is approaching, which one image cannot (the frame stacking of Mnih et
+/// al., "Human-level control through deep reinforcement learning", Nature 518, 2015, at a lag).
+/// frame_history_span(frames, lag) slots keep `frames` earlier frames `lag` env-steps apart.
+inline int frame_history_span(int frames, int lag) { return frames * lag + 1; }
+
+/// Every slot set to `frame` (a new episode: its history is its first frame, repeated).
+inline void frame_history_fill(float* ring, int span, int cells, const float* frame) {
+  for (int s = 0; s < span; ++s)
+    for (int c = 0; c < cells; ++c) ring[s * cells + c] = frame[c];
+}
+
+/// The slot that the next frame goes into (the oldest), to be written by the caller, and the new
+/// head: head = frame_history_advance(span, head); then write cells at ring + head * cells.
+inline int frame_history_advance(int span, int head) { return head + 1 < span ? head + 1 : 0; }
+
+/// The frame `ago` env-steps before the newest (0 <= ago < span).
+inline const float* frame_history_at(const float* ring, int span, int cells, int head, int ago) {
+  const int s = head - ago;
+  return ring + (s >= 0 ? s : s + span) * cells;
+}
+
+/// `frames` earlier frames, lag, 2 lag, ... frames x lag env-steps before the newest, one after
+/// another into out (frames x cells floats).
+inline void frame_history_write(const float* ring, int span, int cells, int head, int frames, int lag, float* out) {
+  for (int j = 1; j <= frames; ++j) {
+    const float* f = frame_history_at(ring, span, cells, head, j * lag);
+    for (int c = 0; c < cells; ++c) out[(j - 1) * cells + c] = f[c];
+  }
+}
+
 /// The image part: a range image (row r, column c at ranges[r * row_step + c * col_step]) min-pooled
 /// into rows x cols cells, each the nearest valid range of its block over max_range_m, at most 1
 /// (negative and NaN ranges are no return; an empty block reads 1). Aerial Gym pools its depth

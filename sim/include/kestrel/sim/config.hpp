@@ -302,6 +302,9 @@ struct NavigationConfig {
   int pool_rows = 8, pool_cols = 8;       // the range image min-pooled to rows x cols cells
   NavigationImageEncoding image_encoding = NavigationImageEncoding::range;
   real proximity_scale_m = 0.5f;          // proximity: the range that reads 0.5
+  // The image cells of image_history_frames earlier moments, image_history_lag_env_steps apart,
+  // appended after the current image (0: none, the reference's observation).
+  int image_history_frames = 0, image_history_lag_env_steps = 10;
   NavigationRewardParams reward;
 };
 

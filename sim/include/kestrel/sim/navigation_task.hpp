@@ -40,6 +40,10 @@
 //   - out of bounds (World's 0.5 m margin) counts as a crash as a contact does;
 //   - curriculum levels are 0..10 steps of the obstacle-count range of the environment's asset
 //     classes (the reference counts obstacles, 15..50);
+//   - an optional image history, off by default (task.navigation.image_history_frames): the
+//     cells of the image lag, 2 lag, ... env-steps before, after the current image's; the
+//     reference's VAE latents of one depth image carry no motion, and a feed-forward policy with
+//     one image cannot tell an obstacle it turns away from from one it approaches;
 //   - an optional clearance term, off by default (NavigationRewardParams::clearance_penalty): a
 //     penalty per env-step growing as the nearest ray of the range image falls within clearance_m,
 //     for training (navigation_clearance_reward).
@@ -66,6 +70,8 @@ struct NavigationParams {
   int pool_rows = 8, pool_cols = 8;
   NavigationImageEncoding image_encoding = NavigationImageEncoding::range;  // sim/config.hpp
   float proximity_scale_m = 0.5f;
+  // Earlier images appended after the current one (policy::frame_history_*): frames, lag apart.
+  int image_history_frames = 0, image_history_lag_env_steps = 10;
   NavigationRewardParams reward;
   NavigationCurriculum curriculum;
 };
@@ -84,7 +90,7 @@ float navigation_clearance_reward(float nearest_m, const NavigationRewardParams&
 /// The reference's update_curriculim_level: the next level after a window with this success rate.
 int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level);
 
-/// Observation size: 17 + pool_rows * pool_cols.
+/// Observation size: 17 + (1 + image_history_frames) x pool_rows x pool_cols.
 int navigation_obs_dim(const NavigationParams& p);
 
 /// Actions per environment: 3 (forward_inclination) or 4 (velocity).
