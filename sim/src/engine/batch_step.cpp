@@ -8,6 +8,7 @@
 #include "kestrel/sim/batch_step.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -194,6 +195,10 @@ void motor_stage(const Models& m, const Lane* lanes, const real (&thrust)[4][kMa
 void rigid_body_stage(const Models& m, const Lane* lanes, const real (&body_wrench)[6][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(rigid_body_stage_k(m, lanes, body_wrench));
 }
-void robot_step(const Models& m, const Lane* lanes) { KESTREL_BATCH_DISPATCH(robot_step_k(m, lanes)); }
+unsigned robot_step(const Models& m, const Lane* lanes) {
+  unsigned done = 0;
+  KESTREL_BATCH_DISPATCH(robot_step_k(m, lanes, done));
+  return done;
+}
 
 }  // namespace kestrel::sim::batch

@@ -160,7 +160,9 @@ Robot random_robot(const Stack& s, RngStream& rng, int k) {
   for (int m = 0; m < 4; ++m) hover[m] = rng.uniform(0, 1.2_r);
   EXPECT_EQ(al::motor_model_reset(s.motor, r.motors, rng, hover), Status::ok);
   for (int i = 0; i < 3; ++i) r.action[i] = r.state.position_w[i] + rng.uniform(-(k % 3 == 0 ? 12 : 1), k % 3 == 0 ? 12 : 1);
-  r.action[3] = k % 5 == 0 ? kPi - rng.uniform(0, 0.1_r) : rng.uniform(-1, 1);
+  // Headings near pi, within +-1 rad, and (every 7th) over the whole action range: the kernel's
+  // lane-wise sine and cosine must match sin_cos in every octant.
+  r.action[3] = k % 5 == 0 ? kPi - rng.uniform(0, 0.1_r) : (k % 7 == 3 ? rng.uniform(-9.9_r, 9.9_r) : rng.uniform(-1, 1));
   switch (k % 23) {
     case 1: r.action[0] = 1e6_r; break;  // outside the action range: clipped by the controller
     case 2: r.action[1] = std::numeric_limits<real>::quiet_NaN(); break;
@@ -340,6 +342,75 @@ TEST(SimBatchStep, WorldBitIdenticalWithAndWithoutBatchedPath) {
     EXPECT_EQ(a->state_hash(), b->state_hash()) << k.env;
     EXPECT_GT(a->summary().resets, 0u) << k.env;
   }
+  batch::use_default_kernel();
+}
+
+// The batched path's own short forms (step_batched.cpp): the collision pass of robots clear of the
+// ground done in the kernel (batch::Models::ground_tail), and the env-step's start and end inline
+// for the common case. Every statistic, contact force and state must match the scalar path's bits
+// while robots start and fly at the floor with random velocities (contacts, crashes, resets), leave
+// the bounds where there is no ground plane, time out, and are traced.
+TEST(SimBatchStep, GroundTailAndInlineEnvStepEndsBitIdentical) {
+  struct Case {
+    const char* what;
+    bool at_floor;
+    bool ground_plane;
+    int trace_envs;
+  };
+  for (batch::KernelCopy copy : runnable_copies())
+    for (const Case& k : {Case{"at the floor", true, true, 0}, Case{"at the floor, no ground plane", true, false, 0},
+                          Case{"in the air, timeouts, traced", false, true, 5}}) {
+      ASSERT_TRUE(batch::use_kernel(copy));
+      SCOPED_TRACE(batch::kernel_name());
+      SCOPED_TRACE(k.what);
+      WorldConfig c = world_config("empty", 45, 2);
+      if (k.at_floor) {
+        c.robot.min_init_position_ratio[2] = 0;
+        c.robot.max_init_position_ratio[2] = 0.05_r;
+        c.robot.max_init_linvel_m_s = 4;
+        c.task.min_target_ratio[2] = 0;
+        c.task.max_target_ratio[2] = 0.05_r;
+      }
+      c.env.create_ground_plane = k.ground_plane;
+      c.task.episode_len_env_steps = 90;
+      auto a = build(c, true), b = build(c, false);
+      ASSERT_EQ(a->batched(), kTwinBuild);
+      if (k.trace_envs > 0) {
+        a->enable_trace(k.trace_envs, 400);
+        b->enable_trace(k.trace_envs, 400);
+      }
+      for (int s = 0; s < 400; s += 25) {
+        a->step(25);
+        b->step(25);
+        for (int e = 0; e < 45; ++e) {
+          ASSERT_TRUE(same_body(a->robot_state(e, 0), b->robot_state(e, 0))) << "env " << e << " step " << s;
+          ASSERT_TRUE(same_bits(a->contact_force_w(e, 0).data(), b->contact_force_w(e, 0).data(), 3)) << "env " << e << " step " << s;
+          const EnvStats &x = a->stats(e), &y = b->stats(e);
+          ASSERT_EQ(x.env_steps, y.env_steps);
+          ASSERT_EQ(x.crashes, y.crashes) << "env " << e;
+          ASSERT_EQ(x.resets, y.resets) << "env " << e;
+          ASSERT_EQ(x.timeouts, y.timeouts) << "env " << e;
+          ASSERT_EQ(x.out_of_bounds, y.out_of_bounds) << "env " << e;
+          ASSERT_EQ(x.successes, y.successes) << "env " << e;
+          ASSERT_EQ(std::memcmp(&x.tracking_error_sum_m, &y.tracking_error_sum_m, sizeof(double)), 0) << "env " << e;
+          ASSERT_EQ(std::memcmp(&x.final_distance_sum_m, &y.final_distance_sum_m, sizeof(double)), 0) << "env " << e;
+        }
+      }
+      EXPECT_EQ(a->state_hash(), b->state_hash());
+      const WorldSummary sa = a->summary();
+      EXPECT_GT(sa.resets, 0u);
+      if (k.at_floor && k.ground_plane) {
+        EXPECT_GT(sa.crashes, 0u) << "the robots must reach the ground";
+      }
+      if (!k.ground_plane) {
+        EXPECT_GT(sa.out_of_bounds, 0u) << "the robots must fall out of the bounds";
+      }
+      if (k.trace_envs > 0) {
+        EXPECT_GT(sa.timeouts, 0u);
+        for (int e = 0; e < k.trace_envs; ++e)
+          for (int t = 0; t < a->trace_length(); ++t) ASSERT_TRUE(same_bits(a->trace_point(e, t).data(), b->trace_point(e, t).data(), 3));
+      }
+    }
   batch::use_default_kernel();
 }
 

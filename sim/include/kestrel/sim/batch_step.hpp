@@ -8,8 +8,9 @@
 // (update_lee_position, allocate_sequential_desaturation<4>, motor_model_step, wrench_from_thrusts,
 // step_rigid_body with Eigen 3.4's quaternion product / transformVector / reduction orders), and
 // SIMD add, sub, mul, div and sqrt round exactly like their scalar forms (-ffp-contract=off keeps
-// the compiler from fusing). Trigonometry stays scalar per lane (the same sin_cos / std::sin /
-// std::cos calls). The sequential desaturation of an infeasible command (airmode roll_pitch, the
+// the compiler from fusing). The heading's sine and cosine are the core's own sin_cos (Cephes'
+// polynomial, no libm) computed in every lane with its branches as selects; the attitude update's
+// std::sin / std::cos stay scalar per lane (libm's bits). The sequential desaturation of an infeasible command (airmode roll_pitch, the
 // default) runs in the lanes too, its per-lane early exits as masks. Rare paths (a non-finite or
 // out-of-range command, a singular force or heading, a desired rotation with trace <= 0, another
 // airmode, a scheduled or dead motor, a clamped motor rate, a non-finite result) are detected per
@@ -21,6 +22,12 @@
 // state), semi-implicit Euler (any number of substeps), float build (the quaternion product order
 // is Eigen's SSE path). World (sim/src/engine/step_batched.cpp) also needs one robot per environment, no
 // observation noise and no random disturbance. Anything else runs the scalar path unchanged.
+//
+// Per-robot storage moves in and out as rows where it is laid out in rows (the state's 13 floats,
+// the Lee gains' 12, the actions' and each per-motor array's first 4): one 16-byte load or store
+// per lane and 4x4 transposes, not one scalar access per lane and value. Where World allows it
+// (Models::ground_tail), the kernel also does the collision pass of the robots clear of the ground
+// plane, which is all that pass does in an environment without obstacles.
 #pragma once
 
 #include "kestrel/allocation/airframe.hpp"
@@ -52,6 +59,12 @@ struct Models {
   const RigidBodyModel* body = nullptr;
   real dt_s = 0;
   int substeps = 1;
+  /// The ground tail (robot_step's return value): set by the caller where collide_robots' fast
+  /// path is all a clear robot's collision pass does (one sphere robot per environment over the
+  /// ground plane, no IMU, a crash threshold >= 0); then the kernel does that pass itself for the
+  /// lanes whose Lane::ground_z says so. Radius of the robot's collision sphere.
+  bool ground_tail = false;
+  real ground_radius_m = 0;
 };
 
 /// The twin's view of the core chain's model (robots/multirotor.hpp) and the body model.
@@ -81,9 +94,12 @@ struct Lane {
   ControllerState* ctrl = nullptr;
   allocation::AllocatorState* alloc = nullptr;
   allocation::MotorModelState* motors = nullptr;
-  const real* action = nullptr;           // the applied action (kMaxActionDim values)
-  const Vec3* contact_force_w = nullptr;  // extra world force of the previous collision pass
-  const Vec3* contact_torque_b = nullptr; // added to the rotor torque
+  const real* action = nullptr;     // the applied action (kMaxActionDim values)
+  Vec3* contact_force_w = nullptr;   // extra world force of the previous collision pass (the ground tail writes the next)
+  Vec3* contact_torque_b = nullptr;  // added to the rotor torque (likewise)
+  /// Models::ground_tail only: the height of the ground plane under this lane's robot (-inf
+  /// without a plane; NaN where the environment has obstacles, which leaves its pass to the caller).
+  real ground_z = 0;
 };
 
 /// Whether `m` is the configuration the twin covers (see the file comment).
@@ -92,7 +108,10 @@ bool eligible(const Models& m);
 /// One physics step of lanes() robots (`lanes` points at that many); bit-identical to, per lane, update_controller ->
 /// allocate_sequential_desaturation -> motor_model_step -> wrench_from_thrusts + contact ->
 /// step_rigid_body (substeps times), as World::robot_dynamics does. Requires eligible(m).
-void robot_step(const Models& m, const Lane* lanes);
+/// Returns the lanes (bit l for lane l) whose collision pass it did too (Models::ground_tail: the
+/// robot is clear of the ground, position z - radius >= ground_z; it stores what collide_robots'
+/// fast path stores, a zero force and the zero torque rotated into the body frame); 0 otherwise.
+unsigned robot_step(const Models& m, const Lane* lanes);
 
 /// Robots per call of the copy in use: 4, 8 or 16.
 int lanes();
