@@ -14,7 +14,7 @@ namespace {
 real ground_height(const WorldModel& m, const WorldData& d, real x_w, real y_w, int env) {
   if (m.terrain->type() != TerrainType::plane) return m.terrain->height_at(x_w, y_w);
   if (!m.cfg.env.create_ground_plane) return -1e30_r;
-  return d.lower_w[env][2] < 0 ? d.lower_w[env][2] : 0_r;
+  return ground_plane_z(d, env);
 }
 
 }  // namespace
@@ -46,8 +46,7 @@ void update_scene(const WorldModel& m, WorldData& d, int env) {
     // The terrain takes the ground plane's slot (segmentation 0, as the ground).
     (void)sc.add(m.terrain->scene_shape(), m.terrain->scene_position_w(), Quat::Identity(), 0);
   } else if (m.cfg.env.create_ground_plane) {
-    const real gz = d.lower_w[env][2] < 0 ? d.lower_w[env][2] : 0_r;  // the plane collide_robots uses
-    (void)sc.add(sensors::Shape::plane(), Vec3(0, 0, gz), Quat::Identity(), 0);
+    (void)sc.add(sensors::Shape::plane(), Vec3(0, 0, ground_plane_z(d, env)), Quat::Identity(), 0);  // the plane collide_robots uses
   }
   for (int k = 0; k < d.num_obstacles[env]; ++k) {
     const Obstacle& o = d.env_obstacles(env, m.obstacle_capacity)[k];

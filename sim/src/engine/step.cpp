@@ -120,7 +120,7 @@ void collide_robots(const WorldModel& m, WorldData& d, int env) {
     // (its signed zeros), and a crash only if the threshold were negative.
     const std::size_t i = m.index(env, 0);
     const RigidBodyState& st = d.state[i];
-    const real plane_z = d.lower_w[env][2] < 0 ? d.lower_w[env][2] : 0_r;
+    const real plane_z = ground_plane_z(d, env);
     if (!m.cfg.env.create_ground_plane || st.position_w[2] - m.cfg.robot.shape.radius_m >= plane_z) {
       d.contact_force_w[i] = Vec3::Zero();
       d.contact_torque_b[i] = rotate_inverse(st.orientation_wb, Vec3::Zero());
@@ -157,7 +157,7 @@ void collide_robots(const WorldModel& m, WorldData& d, int env) {
       const int nt = m.terrain->collide(me, m.robot_bound_radius_m, tk);
       for (int c = 0; c < nt; ++c) respond(tk[c], Vec3::Zero());
     } else if (m.cfg.env.create_ground_plane) {
-      respond(collide_plane(me, d.lower_w[env][2] < 0 ? d.lower_w[env][2] : 0_r), Vec3::Zero());
+      respond(collide_plane(me, ground_plane_z(d, env)), Vec3::Zero());
     }
     for (int k = 0; k < n && o[k].aabb_min_w[0] <= mx[0]; ++k) {
       if (o[k].aabb_max_w[0] < mn[0] || o[k].aabb_max_w[1] < mn[1] || o[k].aabb_min_w[1] > mx[1] ||
@@ -206,8 +206,7 @@ void env_step_begin(const WorldModel& m, WorldData& d, int env) {
   const int n = d.phys_steps[env];
   for (int r = 0; r < m.robots_per_env; ++r) d.crashed[m.index(env, r)] = 0;  // per env-step flag
   d.episode_ended[static_cast<std::size_t>(env)] = 0;
-  if (m.cfg.task.setpoint_speed_m_s > 0 && m.cfg.task.kind == TaskKind::position_setpoint &&
-      m.cfg.controller.kind == ControllerKind::lee_position) {
+  if (moves_setpoint(m)) {
     // Moving setpoint: advance it by at most speed * (env-step duration) towards the target.
     const real max_move = m.cfg.task.setpoint_speed_m_s * m.cfg.sim.dt_s * static_cast<real>(n);
     for (int r = 0; r < m.robots_per_env; ++r) {

@@ -49,19 +49,13 @@ unsigned robot_dynamics_batch(const WorldModel& m, WorldData& d, int env0, int n
     lanes[l].contact_force_w = &d.contact_force_w[i];
     lanes[l].contact_torque_b = &d.contact_torque_b[i];
     if (models.ground_tail) {
-      // collide_robots' plane: the environment's floor where it lies below 0, else z = 0.
-      const real floor_z = d.lower_w[env][2] < 0 ? d.lower_w[env][2] : 0_r;
-      const real plane_z = m.cfg.env.create_ground_plane ? floor_z : -std::numeric_limits<real>::infinity();
+      const real plane_z = m.cfg.env.create_ground_plane ? ground_plane_z(d, env) : -std::numeric_limits<real>::infinity();
       lanes[l].ground_z = d.num_obstacles[env] == 0 ? plane_z : std::numeric_limits<real>::quiet_NaN();
     }
   }
   return batch::robot_step(models, lanes);
 }
 
-// Where the kernel may do the collision pass itself (batch::Models::ground_tail): collide_robots'
-// fast path covers the robot alone (one sphere per environment, plane terrain), and nothing
-// between the dynamics and that pass reads what it writes (no IMU) or is raised by a zero normal
-// force (a crash threshold >= 0). Which environments have obstacles is decided per lane.
 // env_step_begin / env_step_end of one environment of a group, for its common case, inline
 // (they were a call each, ~150 instructions per env-step together, most of it the checks for
 // what rarely happens). `quiet` (per world): no moving setpoint, no height samples, no ray
@@ -89,11 +83,13 @@ inline void end_quiet(const WorldModel& m, WorldData& d, int env) {
   ++d.episode_step[static_cast<std::size_t>(env)];
 }
 bool quiet_eligible(const WorldModel& m) {
-  const bool moving_setpoint = m.cfg.task.setpoint_speed_m_s > 0 && m.cfg.task.kind == TaskKind::position_setpoint &&
-                               m.cfg.controller.kind == ControllerKind::lee_position;
-  return m.robots_per_env == 1 && !moving_setpoint && m.height_points == 0 && !m.any_ray_sensor;
+  return m.robots_per_env == 1 && !moves_setpoint(m) && m.height_points == 0 && !m.any_ray_sensor;
 }
 
+// Where the kernel may do the collision pass itself (batch::Models::ground_tail): collide_robots'
+// fast path covers the robot alone (one sphere per environment, plane terrain), and nothing
+// between the dynamics and that pass reads what it writes (no IMU) or is raised by a zero normal
+// force (a crash threshold >= 0). Which environments have obstacles is decided per lane.
 bool ground_tail_eligible(const WorldModel& m) {
   return m.robots_per_env == 1 && m.cfg.robot.shape.type == ShapeType::sphere && m.terrain->type() == TerrainType::plane &&
          !m.any_imu && !(0_r > m.cfg.env.collision_force_threshold_N);

@@ -29,6 +29,15 @@ struct Models;
 
 namespace stage {
 
+/// The height of an environment's ground plane (when the world has one): its floor where that lies
+/// below 0, else z = 0. Collision, sensing and the batched path all use this one rule.
+inline real ground_plane_z(const WorldData& d, int env) { return d.lower_w[env][2] < 0 ? d.lower_w[env][2] : real(0); }
+/// Whether each env-step moves the position setpoint towards the target (TaskConfig::setpoint_speed_m_s).
+inline bool moves_setpoint(const WorldModel& m) {
+  return m.cfg.task.setpoint_speed_m_s > 0 && m.cfg.task.kind == TaskKind::position_setpoint &&
+         m.cfg.controller.kind == ControllerKind::lee_position;
+}
+
 // Episode set-up (sim/src/engine/reset.cpp).
 void reset_env(const WorldModel& m, WorldData& d, int env);
 void generate_layout(const WorldModel& m, WorldData& d, int env, RngStream& rng);
