@@ -12,7 +12,7 @@ step (rsl_rl's transition, SB3's ``_last_obs``). That copy is the only one per s
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -25,7 +25,8 @@ def _success(info: dict, n: int) -> np.ndarray | None:
 
 
 class RslRlVecEnv:
-    """rsl_rl's VecEnv over a KestrelVectorEnv (observation group "policy", used by actor and critic)."""
+    """rsl_rl's VecEnv over a KestrelVectorEnv (observation group "policy", used by actor and critic;
+    with `privileged`, a group "privileged" for the critic alone)."""
 
     def __new__(cls, *args, **kwargs):
         # Subclass rsl_rl.env.VecEnv lazily, so importing kestrel does not import torch/rsl_rl.
@@ -37,8 +38,16 @@ class RslRlVecEnv:
 
 class _RslRlImpl:
     def __init__(self, env: KestrelVectorEnv, device: str = "cpu", reward_scale: float = 1.0, squash: bool = False,
-                 action_repeat: int = 1, distance_shaping: float = 0.0, gamma: float = 0.99):
+                 action_repeat: int = 1, distance_shaping: float = 0.0, gamma: float = 0.99,
+                 privileged: Callable[[], np.ndarray] | None = None):
         import torch
+
+        # privileged: a function giving (num_envs, k) float32 observations of the current state
+        # for the critic alone (observation group "privileged"; the actor, its evaluation and its
+        # export never see them): asymmetric actor-critic (L. Pinto et al., "Asymmetric Actor
+        # Critic for Image-Based Robot Learning", RSS 2018), the value function told what the
+        # policy's sensor cannot see.
+        self._privileged = privileged
 
         # distance_shaping k (position setpoint): the learner's reward gets the potential-based term
         # gamma * Phi(s') - Phi(s) with Phi = -k * |target - position| (Ng, Harada & Russell 1999: the
@@ -80,7 +89,10 @@ class _RslRlImpl:
     def _obs(self, obs: np.ndarray):
         from tensordict import TensorDict
 
-        return TensorDict({"policy": self._torch.from_numpy(obs.copy())}, batch_size=[self.num_envs])
+        groups = {"policy": self._torch.from_numpy(obs.copy())}
+        if self._privileged is not None:
+            groups["privileged"] = self._torch.from_numpy(np.ascontiguousarray(self._privileged(), dtype=np.float32))
+        return TensorDict(groups, batch_size=[self.num_envs])
 
     def get_observations(self):
         return self._obs(self.env.current_observations)

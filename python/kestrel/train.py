@@ -160,6 +160,25 @@ class _Timer:
         env.step = timed  # type: ignore[method-assign]
 
 
+def privileged_proximities(env: KestrelVectorEnv, count: int, scale_m: float = 0.5) -> Callable[[], np.ndarray]:
+    """The critic's privileged observations of --critic-sensors: the last `count` ray images of
+    every robot (the sensors appended after the policy's own), each ray as the proximity
+    1 / (1 + r / scale_m) the navigation observation uses (a ray without a return: 0), flattened
+    per environment. Read from the simulator's image views when called (after each step and reset)."""
+    def read() -> np.ndarray:
+        sim = env.task.simulator  # looked up each call: a reset with a seed rebuilds the task
+        total = sim.num_range_images
+        parts = []
+        for k in range(total - count, total):
+            r = np.asarray(sim.range_images(k), np.float32)
+            hit = np.isfinite(r) & (r >= 0) & (r < sim.range_image_info(k)["max_range_m"])
+            prox = np.where(hit, 1.0 / (1.0 + np.where(hit, r, 0.0) / scale_m), 0.0)
+            parts.append(prox.reshape(r.shape[0], -1).astype(np.float32))
+        return np.concatenate(parts, axis=1)
+
+    return read
+
+
 def _rsl_rl_cfg(args) -> dict:
     # --rnn: rsl-rl-lib's RNNModel for actor and critic (a GRU or LSTM over the observations, then
     # the MLP), legged_gym's ActorCriticRecurrent in rsl-rl-lib 5's form; PPO then trains on whole
@@ -172,7 +191,8 @@ def _rsl_rl_cfg(args) -> dict:
     return {
         "num_steps_per_env": args.rollout,
         "save_interval": 10**9,
-        "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "obs_groups": {"actor": ["policy"],
+                       "critic": ["policy", "privileged"] if getattr(args, "critic_sensors", None) else ["policy"]},
         "actor": {"class_name": model, "hidden_dims": list(args.hidden), "activation": "elu",
                   "obs_normalization": bool(args.obs_norm), **rnn,
                   "distribution_cfg": {"class_name": "rsl_rl.modules.GaussianDistribution", "init_std": args.init_std}},
@@ -230,7 +250,9 @@ class Learner:
             self.squash = bool(args.squash) and float(env.single_action_space.high[0]) == 1.0
             self.venv = RslRlVecEnv(env, reward_scale=args.reward_scale, squash=self.squash, action_repeat=args.action_repeat,
                                      distance_shaping=args.shaping if env.task.name == "position_setpoint_task" else 0.0,
-                                     gamma=args.gamma)
+                                     gamma=args.gamma,
+                                     privileged=privileged_proximities(env, len(args.critic_sensors))
+                                     if getattr(args, "critic_sensors", None) else None)
             with contextlib.redirect_stdout(io.StringIO()):
                 self.runner = OnPolicyRunner(self.venv, _rsl_rl_cfg(args), log_dir=None, device="cpu")
             self.steps_per_iter = args.rollout * env.num_envs * self.venv.action_repeat
@@ -605,6 +627,10 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     p.add_argument("--sensors", default=None,
                    help="the robot's sensors as a JSON list of scenario `sensors:` entries (replacing the task's), e.g. "
                         "'[{\"name\": \"vl53l5cx\", \"max_range_m\": 10}]' (docs/scenario_reference.md; checked like a scenario's)")
+    p.add_argument("--critic-sensors", default=None,
+                   help="rsl_rl: sensors (a JSON list of scenario sensor entries) appended to the training robots' for the "
+                        "critic alone (asymmetric actor-critic): each ray as a proximity 1/(1 + r/0.5 m); the policy, its "
+                        "evaluation and its export never see them; needs the policy's sensors (--sensors or the task's default)")
     p.add_argument("--train-task-set", default=None,
                    help="scenario `task:` keys as a JSON object for the training environments only, on top of --task-set: "
                         "training-side randomisation the evaluation must not see (it replaces a task's default one: "
@@ -680,11 +706,21 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
     if args.episode_len:
         overrides["task"] = {**overrides.get("task", {}), "episode_len_env_steps": args.episode_len}
     train_overrides = overrides
+    if args.critic_sensors:
+        if args.learner != "rsl_rl":
+            raise SystemExit(f"--critic-sensors: takes --learner rsl_rl (got {args.learner})")
+        args.critic_sensors = _json_arg("--critic-sensors", args.critic_sensors, list, "a JSON list of sensor entries")
+        if not args.critic_sensors:
+            raise SystemExit("--critic-sensors: expected at least one sensor entry, got []")
+        if "sensors" not in overrides:
+            raise SystemExit("--critic-sensors: the policy's sensors must be given too (--sensors), so that the "
+                             "critic's are appended after them")
+        train_overrides = {**overrides, "sensors": list(overrides["sensors"]) + list(args.critic_sensors)}
     if args.train_task_set:
         from . import _merge
 
         train_set = _task_keys("--train-task-set", args.train_task_set)
-        train_overrides = {**overrides, "task": _merge(dict(overrides.get("task", {})), train_set)}
+        train_overrides = {**train_overrides, "task": _merge(dict(overrides.get("task", {})), train_set)}
     os.makedirs(os.path.join(args.out, "checkpoints"), exist_ok=True)
     if args.address is not None or args.rollout_workers is not None:
         # Environments on a Ray cluster, in slices keyed by global index: the same batches as one
@@ -831,7 +867,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m kestrel.train") -
                "sim_share": round(timer.sim_s / t_train, 3) if t_train > 0 else None,
                "target_success": args.target_success, "reached": reached, "final": rows[-1], "initial": rows[0],
                "final_eval": final_eval, "hidden": list(args.hidden), "rnn": list(args.rnn) if args.rnn else None,
-               "sensors": args.sensors, "task_set": args.task_set,
+               "sensors": args.sensors, "critic_sensors": args.critic_sensors, "task_set": args.task_set,
                "train_task_set": args.train_task_set, "resume": args.resume,
                "train_episodes": int(env.task.infos.get("episodes", 0)),
                "export": exported, "tensorboard": args.out if args.tensorboard else None, "cpu_count": os.cpu_count(),

@@ -244,3 +244,64 @@ def test_rnn_policy_trains_and_its_evaluation_copy_matches_the_model(tmp_path):
     with pytest.raises(SystemExit, match="no export"):
         main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--rnn", "gru:8",
               "--export", "1"])
+
+
+def test_critic_sensors_reach_the_critic_alone(tmp_path):
+    # --critic-sensors: a 360-degree ring appended to the training robots' sensors whose rays, as
+    # proximities, the critic alone reads (asymmetric actor-critic). The actor and its export keep
+    # the policy's 17 + 3 x 64 inputs; the critic takes those plus the ring's 4 x 12 rays. A ring
+    # without noise changes nothing the policy sees: the training envs' observations and rewards
+    # equal those of envs without it, step by step.
+    import argparse
+    import json
+
+    import onnx
+    import pytest
+    import torch
+
+    from kestrel.adapters import RslRlVecEnv
+    from kestrel.train import _TASK_DEFAULTS, main, privileged_proximities
+    from kestrel.vector_env import make_vec
+
+    ring = [{"name": "vl53l5cx", "height": 4, "width": 12, "max_range_m": 10, "every": 5, "horizontal_fov_deg_min": -165,
+             "horizontal_fov_deg_max": 165, "vertical_fov_deg_min": -30, "vertical_fov_deg_max": 30,
+             "enable_sensor_noise": False}]
+    s = main(["Kestrel-Navigation-v0", "--envs", "8", "--steps", "960", "--eval-every", "960", "--eval-episodes", "4",
+              "--episode-len", "30", "--threads", "1", "--out", str(tmp_path), "--quiet", "--export", "1",
+              "--critic-sensors", json.dumps(ring)])
+    assert s["critic_sensors"] == ring
+    ck = torch.load(sorted((tmp_path / "checkpoints").glob("*.pt"))[-1], map_location="cpu", weights_only=False)
+    assert ck["actor_state_dict"]["mlp.0.weight"].shape[1] == 17 + 3 * 64
+    assert ck["critic_state_dict"]["mlp.0.weight"].shape[1] == 17 + 3 * 64 + 4 * 12
+    dims = [d.dim_value for d in onnx.load(str(tmp_path / "policy.onnx")).graph.input[0].type.tensor_type.shape.dim]
+    assert dims[-1] == 17 + 3 * 64
+
+    d = _TASK_DEFAULTS["Kestrel-Navigation-v0"]
+    task, sensors = json.loads(d["task_set"]), json.loads(d["sensors"])
+    with_ring = make_vec("Kestrel-Navigation-v0", num_envs=6, seed=2, threads=1, sensors=sensors + ring, task=task)
+    without = make_vec("Kestrel-Navigation-v0", num_envs=6, seed=2, threads=1, sensors=sensors, task=task)
+    read = privileged_proximities(with_ring, 1)
+    venv = RslRlVecEnv(with_ring, squash=True, action_repeat=5, privileged=read)
+    td, _ = venv.reset()
+    without.reset(seed=2)
+    assert td["privileged"].shape == (6, 48)
+    ranges = np.asarray(with_ring.task.simulator.range_images(1), np.float32).reshape(6, -1)
+    hit = (ranges >= 0) & (ranges < 10)
+    np.testing.assert_allclose(td["privileged"].numpy(), np.where(hit, 1 / (1 + ranges / 0.5), 0), rtol=1e-6)
+    assert 0 < hit.mean() < 1  # the ring sees obstacles and open space
+    rng = np.random.default_rng(1)
+    for _ in range(60):
+        a = rng.uniform(-2, 2, (6, 3)).astype(np.float32)
+        td, *_ = venv.step(torch.from_numpy(a))
+        for _ in range(5):
+            o, r, *_ = without.step(torch.tanh(torch.from_numpy(a)).numpy())
+        np.testing.assert_array_equal(td["policy"].numpy(), o)
+    with pytest.raises(SystemExit, match="--critic-sensors: expected a JSON list"):
+        main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet",
+              "--critic-sensors", '{"name": "vl53l5cx"}'])
+    with pytest.raises(SystemExit, match="--critic-sensors: takes --learner rsl_rl"):
+        main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet", "--learner", "sb3",
+              "--critic-sensors", json.dumps(ring)])
+    with pytest.raises(SystemExit, match="the policy's sensors must be given"):
+        main(["Kestrel-PositionSetpoint-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet",
+              "--critic-sensors", json.dumps(ring)])
