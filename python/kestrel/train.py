@@ -163,15 +163,28 @@ class _Timer:
 def privileged_proximities(env: KestrelVectorEnv, count: int, scale_m: float = 0.5) -> Callable[[], np.ndarray]:
     """The critic's privileged observations of --critic-sensors: the last `count` ray images of
     every robot (the sensors appended after the policy's own), each ray as the proximity
-    1 / (1 + r / scale_m) the navigation observation uses (a ray without a return: 0), flattened
-    per environment. Read from the simulator's image views when called (after each step and reset)."""
+    1 / (1 + r / scale_m) the navigation observation uses (r in metres; a ray without a return,
+    r outside [0, max_range_m): 0), flattened per environment. Read from the simulator's image
+    views when called (after each step and reset)."""
+    cache: dict = {}
+
+    def layout(sim):
+        # Per image: its metres per stored value (a sensor with normalize_range stores fractions
+        # of its range) and its range in metres; looked up once per simulator, not per step.
+        if cache.get("sim") is not sim:
+            total = sim.num_range_images
+            rays = [sim.range_image_rays(k) for k in range(total - count, total)]
+            cache.update(sim=sim, first=total - count,
+                         scales=[(float(r["value_scale_m"]), float(r["max_range_m"])) for r in rays])
+        return cache["first"], cache["scales"]
+
     def read() -> np.ndarray:
         sim = env.task.simulator  # looked up each call: a reset with a seed rebuilds the task
-        total = sim.num_range_images
+        first, scales = layout(sim)
         parts = []
-        for k in range(total - count, total):
-            r = np.asarray(sim.range_images(k), np.float32)
-            hit = np.isfinite(r) & (r >= 0) & (r < sim.range_image_info(k)["max_range_m"])
+        for j, (value_m, max_m) in enumerate(scales):
+            r = np.asarray(sim.range_images(first + j), np.float32) * np.float32(value_m)
+            hit = np.isfinite(r) & (r >= 0) & (r < max_m)
             prox = np.where(hit, 1.0 / (1.0 + np.where(hit, r, 0.0) / scale_m), 0.0)
             parts.append(prox.reshape(r.shape[0], -1).astype(np.float32))
         return np.concatenate(parts, axis=1)

@@ -251,8 +251,8 @@ def test_critic_sensors_reach_the_critic_alone(tmp_path):
     # proximities, the critic alone reads (asymmetric actor-critic). The actor and its export keep
     # the policy's 17 + 3 x 64 inputs; the critic takes those plus the ring's 4 x 12 rays. A ring
     # without noise changes nothing the policy sees: the training envs' observations and rewards
-    # equal those of envs without it, step by step.
-    import argparse
+    # equal those of envs without it, step by step. A ring that stores normalised ranges gives the
+    # same proximities (its values read in metres).
     import json
 
     import onnx
@@ -289,13 +289,22 @@ def test_critic_sensors_reach_the_critic_alone(tmp_path):
     hit = (ranges >= 0) & (ranges < 10)
     np.testing.assert_allclose(td["privileged"].numpy(), np.where(hit, 1 / (1 + ranges / 0.5), 0), rtol=1e-6)
     assert 0 < hit.mean() < 1  # the ring sees obstacles and open space
+    normalised = make_vec("Kestrel-Navigation-v0", num_envs=6, seed=2, threads=1,
+                          sensors=sensors + [{**ring[0], "normalize_range": True}], task=task)
+    normalised.reset(seed=2)
+    assert np.asarray(normalised.task.simulator.range_images(1)).max() <= 1.0
+    np.testing.assert_allclose(privileged_proximities(normalised, 1)(), td["privileged"].numpy(), rtol=1e-5, atol=1e-7)
     rng = np.random.default_rng(1)
     for _ in range(60):
         a = rng.uniform(-2, 2, (6, 3)).astype(np.float32)
-        td, *_ = venv.step(torch.from_numpy(a))
+        td, rew, *_ = venv.step(torch.from_numpy(a))
+        total, ended = np.zeros(6), np.zeros(6, bool)  # the adapter's sum over the held action
         for _ in range(5):
-            o, r, *_ = without.step(torch.tanh(torch.from_numpy(a)).numpy())
+            o, r, te, tr, _ = without.step(torch.tanh(torch.from_numpy(a)).numpy())
+            total += np.where(ended, 0.0, r)
+            ended |= te | tr
         np.testing.assert_array_equal(td["policy"].numpy(), o)
+        np.testing.assert_array_equal(rew.numpy(), total.astype(np.float32))
     with pytest.raises(SystemExit, match="--critic-sensors: expected a JSON list"):
         main(["Kestrel-Navigation-v0", "--envs", "4", "--steps", "10", "--out", str(tmp_path), "--quiet",
               "--critic-sensors", '{"name": "vl53l5cx"}'])
