@@ -101,13 +101,22 @@ struct ConstraintData {
   static constexpr int kRows = 3 * kMaxContacts + 3 * kMaxBodies;  // 3 per contact, 3 per joint (two limits, friction)
   real H[kDofs][kDofs];  // mass matrix + h D at the step's start, then its L^T D L factors
   int dof_parent[kDofs];  // the velocity coordinate each one hangs from (-1: none)
+  // Per velocity coordinate k: k and its ancestors, deepest first (chain_of[k][0..chain_len[k])),
+  // and L's entries along that chain in the same order, L_chain[k][j] = L(k, chain_of[k][j + 1]).
+  // Built once per step: a row's solves then run over contiguous arrays instead of walking the
+  // parent links and gathering L through them at every row (a sixth of a standing Go2's step).
+  std::int16_t chain_of[kDofs][kDofs];
+  std::int16_t chain_len[kDofs];
+  real L_chain[kDofs][kDofs];
   Transform X_world[kMaxBodies];
   real J[kRows][kDofs];  // constraint rows
-  real ZT[kDofs][kRows];  // column i: L^-T J_i^T, half of the solve (W = Z^T D^-1 Z), stored by coordinate
+  static constexpr int kRowsPad = (kRows + 3) / 4 * 4;
+  real ZT[kDofs][kRowsPad];  // column i: L^-T J_i^T, half of the solve (W = Z^T D^-1 Z), stored by coordinate
+  real ZDT[kDofs][kRowsPad];  // ZT's row k divided by D_k, all rows of it at once (vector divisions)
   std::int32_t key[kRows];   // the row's name between steps (WarmStart; -1: none)
   std::int16_t leaf[kRows];  // the deepest velocity coordinate row i involves (its chain up from there; -1: none)
   std::int16_t leaf_b[kRows];  // a two-body contact's second chain (-1: none); row i involves the union
-  real W[kRows][kRows];  // Delassus matrix
+  real W[kRows][kRowsPad];  // Delassus matrix (zeros in the columns from num_rows to a multiple of 4)
   real b[kRows], target[kRows], lambda[kRows], lo[kRows], hi[kRows];
   RowKind kind[kRows];
   std::int16_t owner[kRows];  // the contact (normal, tangent rows) or the velocity coordinate (joint rows)
@@ -127,11 +136,11 @@ namespace detail {
 /// leaf_b[r] (both descend, since a coordinate's parent has a smaller index, so they merge like two
 /// sorted lists). Returns how many were written to `chain`.
 template <class CD>
-inline int row_chain(const CD& cd, int r, int* chain) {
+inline int row_chain(const CD& cd, int r, std::int16_t* chain) {
   int a = cd.leaf[r], b = cd.leaf_b[r], len = 0;
   while (a >= 0 || b >= 0) {
     const int i = a > b ? a : b;
-    chain[len++] = i;
+    chain[len++] = static_cast<std::int16_t>(i);
     if (a == i) a = cd.dof_parent[a];
     if (b == i) b = cd.dof_parent[b];
   }
@@ -163,32 +172,94 @@ void dof_parents(const MultibodyModel<N>& m, int* parent_dof) {
   }
 }
 
-/// H = L^T D L in place (lower triangle: L below the diagonal, D on it), visiting only the entries
-/// the tree's branches leave non-zero: Featherstone's LTDL factorisation (RBDA table 6.3), whose
-/// cost falls with the number of branches (a quadruped's four legs). Why not Eigen's LLT: its
-/// dynamic-size kernels may allocate a blocking workspace, which the core may not. False if a
-/// pivot is not positive (a singular or non-finite matrix).
-template <int kLd>
-bool ltdl_factor(real (*H)[kLd], const int* parent_dof, int n) {
+/// cd's chain_of and chain_len from dof_parent (see ConstraintData).
+template <class CD>
+void build_chains(CD& cd, int n) {
+  for (int k = 0; k < n; ++k) {
+    int len = 0;
+    for (int j = k; j >= 0; j = cd.dof_parent[j]) cd.chain_of[k][len++] = static_cast<std::int16_t>(j);
+    cd.chain_len[k] = static_cast<std::int16_t>(len);
+  }
+}
+
+/// cd.H = L^T D L in place (lower triangle: L below the diagonal, D on it), visiting only the
+/// entries the tree's branches leave non-zero: Featherstone's LTDL factorisation (RBDA table 6.3),
+/// whose cost falls with the number of branches (a quadruped's four legs), over the chains of
+/// build_chains (the ancestors read from an array, not walked link by link); then L_chain. Why
+/// not Eigen's LLT: its dynamic-size kernels may allocate a blocking workspace, which the core
+/// may not. False if a pivot is not positive (a singular or non-finite matrix).
+template <class CD>
+bool ltdl_factor(CD& cd, int n) {
   for (int k = n - 1; k >= 0; --k) {
-    if (!(H[k][k] > 0) || !is_finite(H[k][k])) return false;
-    for (int i = parent_dof[k]; i >= 0; i = parent_dof[i]) {
-      const real a = H[k][i] / H[k][k];
-      for (int j = i; j >= 0; j = parent_dof[j]) H[i][j] -= H[k][j] * a;
-      H[k][i] = a;
+    real* Hk = cd.H[k];
+    if (!(Hk[k] > 0) || !is_finite(Hk[k])) return false;
+    const std::int16_t* ch = cd.chain_of[k];
+    const int len = cd.chain_len[k];
+    for (int m = 1; m < len; ++m) {
+      const int i = ch[m];
+      const real a = Hk[i] / Hk[k];
+      real* Hi = cd.H[i];
+      for (int q = m; q < len; ++q) Hi[ch[q]] -= Hk[ch[q]] * a;
+      Hk[i] = a;
     }
   }
+  for (int k = 0; k < n; ++k)
+    for (int j = 1; j < cd.chain_len[k]; ++j) cd.L_chain[k][j - 1] = cd.H[k][cd.chain_of[k][j]];
   return true;
 }
 
 /// x = (L^T D L)^-1 x in place, with the factors of ltdl_factor (RBDA table 6.4's solves).
+template <class CD>
+void ltdl_solve(const CD& cd, int n, real* x) {
+  for (int i = n - 1; i >= 0; --i) {  // L^T z = b
+    const std::int16_t* ch = cd.chain_of[i] + 1;
+    const real* L = cd.L_chain[i];
+    const real xi = x[i];
+    for (int q = 0; q + 1 < cd.chain_len[i]; ++q) x[ch[q]] -= L[q] * xi;
+  }
+  for (int i = 0; i < n; ++i) x[i] /= cd.H[i][i];
+  for (int i = 0; i < n; ++i) {  // L x = z
+    const std::int16_t* ch = cd.chain_of[i] + 1;
+    const real* L = cd.L_chain[i];
+    real xi = x[i];
+    for (int q = 0; q + 1 < cd.chain_len[i]; ++q) xi -= L[q] * x[ch[q]];
+    x[i] = xi;
+  }
+}
+
+/// Rows solved together by chain_solve: at most this many.
+constexpr int kChainGroup = 8;
+
+/// z = L^-T z for a group of G <= kChainGroup rows along one chain (zc[a][g] = z_g[chain[a]], len
+/// of them): the coordinates after chain[k] are exactly chain[k]'s ancestors, so the entries of L
+/// they need are L_chain[chain[k]] in the same order, contiguous. A row whose leaf lies higher up
+/// the chain has zeros below it, which the steps there leave as they are: each row gets the bits
+/// of its own solve. Why groups: one row's solve is a chain of dependent multiply-subtracts, one
+/// per coordinate pair (latency-bound, a tenth of a standing Go2's step); G rows side by side
+/// share the loads and fill the pipeline (a contact's three rows, a leg's joint rows).
+/// All kChainGroup lanes are computed (unused ones hold zeros): a fixed width the compiler turns
+/// into whole vector operations.
 template <int kLd>
-void ltdl_solve(const real (*H)[kLd], const int* parent_dof, int n, real* x) {
-  for (int i = n - 1; i >= 0; --i)  // L^T z = b
-    for (int j = parent_dof[i]; j >= 0; j = parent_dof[j]) x[j] -= H[i][j] * x[i];
-  for (int i = 0; i < n; ++i) x[i] /= H[i][i];
-  for (int i = 0; i < n; ++i)  // L x = z
-    for (int j = parent_dof[i]; j >= 0; j = parent_dof[j]) x[i] -= H[i][j] * x[j];
+inline void chain_solve(const std::int16_t* chain, int len, const real (*L_chain)[kLd], real (*zc)[kChainGroup]) {
+  using Group = Eigen::Array<real, kChainGroup, 1, Eigen::DontAlign>;
+  for (int k = 0; k < len; ++k) {
+    const real* Lk = L_chain[chain[k]] - (k + 1);
+    const Group zk = Eigen::Map<const Group>(zc[k]);  // a copy: no aliasing with the rows below
+    for (int a = k + 1; a < len; ++a) Eigen::Map<Group>(zc[a]) -= Lk[a] * zk;
+  }
+}
+
+/// Row r's chain of velocity coordinates (row_chain's) without walking the links for a row on one
+/// chain: cd.chain_of of its leaf; a two-body row's merged chain is written to `buffer`. Sets
+/// *chain and returns the length.
+template <class CD>
+inline int row_chain_view(const CD& cd, int r, std::int16_t* buffer, const std::int16_t** chain) {
+  if (cd.leaf_b[r] < 0) {
+    *chain = cd.leaf[r] >= 0 ? cd.chain_of[cd.leaf[r]] : buffer;
+    return cd.leaf[r] >= 0 ? cd.chain_len[cd.leaf[r]] : 0;
+  }
+  *chain = buffer;
+  return row_chain(cd, r, buffer);
 }
 
 template <int N>
@@ -254,8 +325,9 @@ template <int N, int C, int W = 1>
     }
   }
   detail::dof_parents(m, cd.dof_parent);
-  if (!detail::ltdl_factor(cd.H, cd.dof_parent, n)) return Status::non_finite_input;
-  detail::ltdl_solve(cd.H, cd.dof_parent, n, acc);
+  detail::build_chains(cd, n);
+  if (!detail::ltdl_factor(cd, n)) return Status::non_finite_input;
+  detail::ltdl_solve(cd, n, acc);
   real v_free[kDofs];
   for (int k = 0; k < n; ++k) v_free[k] = qd[k] + dt_s * acc[k];
   if (!all_finite(v_free, n)) return Status::non_finite_input;
@@ -343,46 +415,83 @@ template <int N, int C, int W = 1>
   // two-body contact's, the two bodies' chains), which is where the tree's sparsity pays (RBDA
   // section 6.5); b = J v*. The chain is deepest first, so each coordinate is final before it is
   // passed up.
-  int chain[kDofs];
-  for (int r = 0; r < rows; ++r) {
-    real z[kDofs];  // solved here, then stored by coordinate
-    for (int k = 0; k < n; ++k) z[k] = 0;
-    const int len = detail::row_chain(cd, r, chain);
-    for (int k = 0; k < len; ++k) z[chain[k]] = cd.J[r][chain[k]];
-    if (cd.leaf_b[r] < 0) {
-      // One chain: the coordinates after chain[k] are exactly its ancestors, in the order the
-      // parent links give them, read from the array instead of walked link by link (a chain of
-      // dependent loads per coordinate).
-      for (int k = 0; k < len; ++k) {
-        const real zi = z[chain[k]];
-        const real* Hi = cd.H[chain[k]];
-        for (int a = k + 1; a < len; ++a) z[chain[a]] -= Hi[chain[a]] * zi;
-      }
-    } else {
-      for (int k = 0; k < len; ++k) {
-        const int i = chain[k];
+  using Four = Eigen::Array<real, 4, 1, Eigen::DontAlign>;
+  std::int16_t merged[kDofs];  // a two-body row's chain
+  const int rows_pad = (rows + 3) / 4 * 4;  // W's rows are summed four columns at a time below
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < rows_pad; ++c) cd.ZT[k][c] = 0;
+  for (int r0 = 0; r0 < rows;) {
+    if (cd.leaf_b[r0] >= 0 || cd.leaf[r0] < 0) {  // a two-body row (or one that moves nothing): alone
+      real z[kDofs];
+      for (int k = 0; k < n; ++k) z[k] = 0;
+      const int len = detail::row_chain(cd, r0, merged);
+      for (int a = 0; a < len; ++a) z[merged[a]] = cd.J[r0][merged[a]];
+      for (int a = 0; a < len; ++a) {
+        const int i = merged[a];
         for (int j = cd.dof_parent[i]; j >= 0; j = cd.dof_parent[j]) z[j] -= cd.H[i][j] * z[i];
       }
+      for (int a = 0; a < len; ++a) cd.ZT[merged[a]][r0] = z[merged[a]];
+      real bv = 0;
+      for (int a = 0; a < len; ++a) bv += cd.J[r0][merged[a]] * v_free[merged[a]];
+      cd.b[r0] = bv;
+      ++r0;
+      continue;
     }
-    for (int k = 0; k < n; ++k) cd.ZT[k][r] = z[k];
-    real bv = 0;
-    for (int k = 0; k < len; ++k) bv += cd.J[r][chain[k]] * v_free[chain[k]];
-    cd.b[r] = bv;
+    // The group: the rows from r0 on, while each one's leaf has the previous rows' leaves on its
+    // chain (the same leaf, or a deeper joint of the same leg).
+    int r1 = r0 + 1;
+    for (; r1 < rows && r1 - r0 < detail::kChainGroup && cd.leaf_b[r1] < 0 && cd.leaf[r1] >= 0; ++r1) {
+      const int deep = cd.leaf[r1], prev = cd.leaf[r1 - 1];
+      const int off = cd.chain_len[deep] - cd.chain_len[prev];
+      if (off < 0 || cd.chain_of[deep][off] != prev) break;
+    }
+    const int G = r1 - r0;
+    const std::int16_t* chain = cd.chain_of[cd.leaf[r1 - 1]];
+    const int len = cd.chain_len[cd.leaf[r1 - 1]];
+    real zc[kDofs][detail::kChainGroup];
+    int start[detail::kChainGroup];  // where each row's own chain begins on the group's
+    for (int a = 0; a < len; ++a)
+      for (int g = 0; g < detail::kChainGroup; ++g) zc[a][g] = 0;
+    for (int g = 0; g < G; ++g) {
+      const int r = r0 + g;
+      start[g] = len - cd.chain_len[cd.leaf[r]];
+      for (int a = start[g]; a < len; ++a) zc[a][g] = cd.J[r][chain[a]];
+    }
+    detail::chain_solve(chain, len, cd.L_chain, zc);
+    for (int g = 0; g < G; ++g) {
+      const int r = r0 + g;
+      real bv = 0;
+      for (int a = start[g]; a < len; ++a) {
+        cd.ZT[chain[a]][r] = zc[a][g];
+        bv += cd.J[r][chain[a]] * v_free[chain[a]];
+      }
+      cd.b[r] = bv;
+    }
+    r0 = r1;
+  }
+  // Z_rk / D_k for every row at once, four divisions per instruction.
+  for (int k = 0; k < n; ++k) {
+    const Four D = Four::Constant(cd.H[k][k]);
+    for (int c = 0; c < rows_pad; c += 4) Eigen::Map<Four>(cd.ZDT[k] + c) = Eigen::Map<const Four>(cd.ZT[k] + c) / D;
   }
   for (int r = 0; r < rows; ++r) {
-    // Row r of W's lower triangle, sum_k (Z_rk / D_k) Z_ck over row r's chain: one contiguous
-    // multiply-add over the rows c <= r per coordinate (Z is stored by coordinate for it, and
-    // vectorises), in the chain's order; one division per coordinate, not per pair of rows.
-    const int len = detail::row_chain(cd, r, chain);
+    // Row r of W's lower triangle, sum_k (Z_rk / D_k) Z_ck over row r's chain, in the chain's
+    // order (Z is stored by coordinate for it): four columns c <= r at a time, summed in
+    // registers (stored and reloaded per coordinate, one column at a time, the sums were a
+    // dependent chain through memory; the additions are the same, in the same order). ZT's
+    // columns up to rows_pad are written (zeros past the rows).
+    const std::int16_t* chain;
+    const int len = detail::row_chain_view(cd, r, merged, &chain);
+    real zd[kDofs];
+    for (int k = 0; k < len; ++k) zd[k] = cd.ZDT[chain[k]][r];
     real* w = cd.W[r];
-    for (int c = 0; c <= r; ++c) w[c] = 0;
-    for (int k = 0; k < len; ++k) {
-      const int i = chain[k];
-      const real zd = cd.ZT[i][r] / cd.H[i][i];
-      const real* zc = cd.ZT[i];
-      for (int c = 0; c <= r; ++c) w[c] += zd * zc[c];
+    for (int c0 = 0; c0 <= r; c0 += 4) {
+      Four sum = Four::Zero();
+      for (int k = 0; k < len; ++k) sum += zd[k] * Eigen::Map<const Four>(cd.ZT[chain[k]] + c0);
+      for (int j = 0; j < 4 && c0 + j <= r; ++j) w[c0 + j] = sum[j];
     }
     for (int c = 0; c < r; ++c) cd.W[c][r] = w[c];
+    for (int c = rows; c < rows_pad; ++c) w[c] = 0;
   }
 
   // Projected Gauss-Seidel over residuals u = b - target + W lambda kept for all rows at once:
@@ -394,11 +503,16 @@ template <int N, int C, int W = 1>
   // change nothing, so it stops (updated incrementally only, u's rounding kept a standing ANYmal's
   // changes at ~1e-6 m/s, the tolerance, for all 60 sweeps). Fixed orders: the same bits on every
   // target.
-  real u[CD::kRows];
-  auto apply = [&](int r, real delta) {
+  real u[CD::kRowsPad];
+  for (int c = rows; c < rows_pad; ++c) u[c] = 0;
+  // u += W_r delta, four rows at a time, over the rows from `from` on (from the block that holds
+  // it). Within a sweep only the rows not yet visited (from r on) need it: the next sweep sums u
+  // afresh and nothing else reads it, so the rows behind are left stale (half the work, the same
+  // values where they are read). W's and u's padding past the rows holds zeros.
+  auto apply = [&](int r, real delta, int from) {
     if (delta == 0) return;
     const real* w = cd.W[r];
-    for (int c = 0; c < rows; ++c) u[c] += w[c] * delta;
+    for (int c = from & ~3; c < rows_pad; c += 4) Eigen::Map<Four>(u + c) += Eigen::Map<const Four>(w + c) * delta;
   };
   auto residual = [&](int r) { return u[r]; };
   if (warm != nullptr) {
@@ -431,7 +545,7 @@ template <int N, int C, int W = 1>
   for (; sweep < p.iterations && rows > 0; ++sweep) {
     real change = 0;
     for (int c = 0; c < rows; ++c) u[c] = cd.b[c] - cd.target[c];
-    for (int c = 0; c < rows; ++c) apply(c, cd.lambda[c]);
+    for (int c = 0; c < rows; ++c) apply(c, cd.lambda[c], 0);
     for (int r = 0; r < rows;) {
       const real diag = cd.W[r][r] * (1 + p.regularization);
       if (!(diag > 0)) {  // a row nothing can move (a contact on a welded base): no impulse
@@ -442,7 +556,7 @@ template <int N, int C, int W = 1>
         // The normal row, then the contact's two friction rows projected onto the cone.
         const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
         change = std::max(change, std::fabs(ln - cd.lambda[r]) * diag);
-        apply(r, ln - cd.lambda[r]);
+        apply(r, ln - cd.lambda[r], r);
         cd.lambda[r] = ln;
         // Gauss-Seidel within the pair: the second friction row sees the first's new impulse
         // (through W's one entry between them; u takes both once they are projected).
@@ -458,7 +572,7 @@ template <int N, int C, int W = 1>
         for (int a = 1; a <= 2; ++a) {
           const real v = lt[a - 1] * scale;
           change = std::max(change, std::fabs(v - cd.lambda[r + a]) * cd.W[r + a][r + a]);
-          apply(r + a, v - cd.lambda[r + a]);
+          apply(r + a, v - cd.lambda[r + a], r + a);
           cd.lambda[r + a] = v;
         }
         r += 3;
@@ -467,7 +581,7 @@ template <int N, int C, int W = 1>
       real l = cd.lambda[r] - residual(r) / diag;
       l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
       change = std::max(change, std::fabs(l - cd.lambda[r]) * diag);
-      apply(r, l - cd.lambda[r]);
+      apply(r, l - cd.lambda[r], r);
       cd.lambda[r] = l;
       ++r;
     }
@@ -488,10 +602,11 @@ template <int N, int C, int W = 1>
   // v = v* + Y^T lambda, then the positions with it.
   real v_new[kDofs] = {};
   for (int r = 0; r < rows; ++r) {
-    const int len = detail::row_chain(cd, r, chain);
+    const std::int16_t* chain;
+    const int len = detail::row_chain_view(cd, r, merged, &chain);
     for (int k = 0; k < len; ++k) v_new[chain[k]] += cd.J[r][chain[k]] * cd.lambda[r];
   }
-  detail::ltdl_solve(cd.H, cd.dof_parent, n, v_new);  // (H + h D)^-1 J^T lambda
+  detail::ltdl_solve(cd, n, v_new);  // (H + h D)^-1 J^T lambda
   for (int k = 0; k < n; ++k) v_new[k] += v_free[k];
   if (!all_finite(v_new, n)) return Status::non_finite_input;
   detail::integrate_positions(m, q, v_new, dt_s);

@@ -75,6 +75,10 @@ struct MultibodyModel {
   // then takes X_up's rotation as the elementary rotation about axis k that it is (a third of the
   // multiplications of a general rotation's). Call finish_model again after changing axis or X_tree.
   std::int8_t elementary_axis[kMaxBodies] = {};
+  // Set by finish_model: c where joint i's motion subspace S is the unit spatial vector e_c (a
+  // revolute joint about +x, +y, +z: c = 0, 1, 2; a prismatic one along them: 3, 4, 5), whatever
+  // X_tree; -1 otherwise. crba and rnea then read S . f as f[c] and I S as a column of I.
+  std::int8_t unit_subspace[kMaxBodies] = {};
   Vec3 gravity_w = Vec3(0, 0, -9.81_r);
 };
 
@@ -120,6 +124,7 @@ template <int N>
     if (!(I(0, 0) > 0 && I(1, 1) > 0 && I(2, 2) > 0) || !(I - I.transpose()).isZero(real(1e-6) * I.trace()))
       return Status::invalid_argument;
     m.elementary_axis[i] = -1;
+    m.unit_subspace[i] = -1;
     if (m.joint[i] == JointType::fixed) {
       m.dof_index[i] = m.q_index[i] = -1;
       continue;
@@ -141,9 +146,12 @@ template <int N>
       return Status::invalid_argument;
     m.dof_index[i] = dof++;
     m.q_index[i] = nq++;
-    if (m.joint[i] == JointType::revolute && m.X_tree[i].E == Mat3::Identity())
-      for (int k = 0; k < 3; ++k)
-        if (m.axis[i] == Vec3::Unit(k)) m.elementary_axis[i] = static_cast<std::int8_t>(k);
+    for (int k = 0; k < 3; ++k)
+      if (m.axis[i] == Vec3::Unit(k)) {
+        m.unit_subspace[i] = static_cast<std::int8_t>(m.joint[i] == JointType::revolute ? k : 3 + k);
+        if (m.joint[i] == JointType::revolute && m.X_tree[i].E == Mat3::Identity())
+          m.elementary_axis[i] = static_cast<std::int8_t>(k);
+      }
   }
   if (dof > max_dofs<N>()) return Status::invalid_argument;
   m.num_dofs = dof;
@@ -227,7 +235,37 @@ inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, 
 template <int N>
 inline real column_dot(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const Vec6& f) {
   if (m.joint[i] == JointType::free) return f[free_column_component(c)];
+  if (m.unit_subspace[i] >= 0) return f[m.unit_subspace[i]];  // S = e_c: the same value as the dot product
   return d.S[i].dot(f);
+}
+
+/// I S for joint column c of body i (rigid_times(I, joint_column(m, d, i, c))) without the
+/// products by S's zeros where S is a unit vector e_u (a free joint's columns, an axis-aligned
+/// joint): I e_u is [Ibar e_u; -h x e_u] for an angular u, [h x e_v; m e_v] for a linear one
+/// (v = u - 3), the values rigid_times gives.
+template <int N>
+inline Vec6 inertia_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const RigidInertia& I) {
+  const int u = m.joint[i] == JointType::free ? free_column_component(c) : m.unit_subspace[i];
+  if (u < 0) return rigid_times(I, d.S[i]);
+  Vec6 F;
+  const Vec3& h = I.h;
+  if (u < 3) {
+    for (int r = 0; r < 3; ++r) F[r] = I.Ibar(r, u);
+    const Vec3 e_x_h(u == 0 ? real(0) : (u == 1 ? h[2] : -h[1]), u == 1 ? real(0) : (u == 0 ? -h[2] : h[0]),
+                     u == 2 ? real(0) : (u == 0 ? h[1] : -h[0]));  // e_u x h = -(h x e_u)
+    F[3] = e_x_h[0];
+    F[4] = e_x_h[1];
+    F[5] = e_x_h[2];
+  } else {
+    const int v = u - 3;
+    const Vec3 h_x_e(v == 0 ? real(0) : (v == 1 ? -h[2] : h[1]), v == 1 ? real(0) : (v == 0 ? h[2] : -h[0]),
+                     v == 2 ? real(0) : (v == 0 ? -h[1] : h[0]));  // h x e_v
+    F[0] = h_x_e[0];
+    F[1] = h_x_e[1];
+    F[2] = h_x_e[2];
+    for (int r = 0; r < 3; ++r) F[3 + r] = r == v ? I.m : real(0);
+  }
+  return F;
 }
 
 /// S qd for joint i's coordinates starting at qd (nullptr or a fixed joint: zero).
@@ -306,7 +344,7 @@ void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd
     if (m.joint[i] == JointType::free) {
       for (int c = 0; c < 6; ++c) tau[k + c] = detail::column_dot(m, d, i, c, d.f[i]);
     } else if (k >= 0) {
-      tau[k] = d.S[i].dot(d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
+      tau[k] = detail::column_dot(m, d, i, 0, d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
     }
     if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
   }
@@ -341,8 +379,7 @@ void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int l
     const int k0 = m.dof_index[i];
     for (int c = 0; c < joint_dofs(m, i); ++c) {  // each of joint i's columns
       const int k = k0 + c;
-      const Vec6 Si = detail::joint_column(m, d, i, c);
-      Vec6 F = rigid_times(d.Ic[i], Si);
+      Vec6 F = detail::inertia_column(m, d, i, c, d.Ic[i]);
       for (int c2 = 0; c2 <= c; ++c2)  // the block of joint i itself
         H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::column_dot(m, d, i, c2, F);
       H[ld * k + k] += m.armature[i];
