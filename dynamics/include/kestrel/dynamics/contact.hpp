@@ -243,9 +243,9 @@ template <int kLd>
 inline void chain_solve(const std::int16_t* chain, int len, const real (*L_chain)[kLd], real (*zc)[kChainGroup]) {
   using Group = Eigen::Array<real, kChainGroup, 1, Eigen::DontAlign>;
   for (int k = 0; k < len; ++k) {
-    const real* Lk = L_chain[chain[k]] - (k + 1);
+    const real* Lk = L_chain[chain[k]];  // Lk[j]: L(chain[k], chain[k + 1 + j])
     const Group zk = Eigen::Map<const Group>(zc[k]);  // a copy: no aliasing with the rows below
-    for (int a = k + 1; a < len; ++a) Eigen::Map<Group>(zc[a]) -= Lk[a] * zk;
+    for (int a = k + 1; a < len; ++a) Eigen::Map<Group>(zc[a]) -= Lk[a - k - 1] * zk;
   }
 }
 
@@ -488,7 +488,7 @@ template <int N, int C, int W = 1>
     for (int c0 = 0; c0 <= r; c0 += 4) {
       Four sum = Four::Zero();
       for (int k = 0; k < len; ++k) sum += zd[k] * Eigen::Map<const Four>(cd.ZT[chain[k]] + c0);
-      for (int j = 0; j < 4 && c0 + j <= r; ++j) w[c0 + j] = sum[j];
+      Eigen::Map<Four>(w + c0) = sum;  // past r: rewritten by the mirror below (later rows) or the padding
     }
     for (int c = 0; c < r; ++c) cd.W[c][r] = w[c];
     for (int c = rows; c < rows_pad; ++c) w[c] = 0;
@@ -600,11 +600,14 @@ template <int N, int C, int W = 1>
   }
 
   // v = v* + Y^T lambda, then the positions with it.
+  // J^T lambda over whole rows (every coordinate at once, vectorised): off a row's chain its
+  // entries are exact zeros, which change no sum, so this is the sum over the chains.
   real v_new[kDofs] = {};
-  for (int r = 0; r < rows; ++r) {
-    const std::int16_t* chain;
-    const int len = detail::row_chain_view(cd, r, merged, &chain);
-    for (int k = 0; k < len; ++k) v_new[chain[k]] += cd.J[r][chain[k]] * cd.lambda[r];
+  {
+    using Dense = Eigen::Array<real, Eigen::Dynamic, 1>;  // a view: Map never allocates
+    Eigen::Map<Dense> v(v_new, n);
+    for (int r = 0; r < rows; ++r)
+      if (cd.lambda[r] != 0) v += Eigen::Map<const Dense>(cd.J[r], n) * cd.lambda[r];
   }
   detail::ltdl_solve(cd, n, v_new);  // (H + h D)^-1 J^T lambda
   for (int k = 0; k < n; ++k) v_new[k] += v_free[k];
