@@ -63,6 +63,10 @@ void random_tree(dy::MultibodyModel<N>& m, int bodies, std::uint32_t stream, boo
       m.axis[i] = Vec3::Unit(static_cast<int>(r.uniform(0, 2.999_r)));
       m.X_tree[i].E = Mat3::Identity();
     }
+    // And every other prismatic joint slides along +x, +y or +z: crba's and rnea's unit-subspace
+    // path (finish_model's unit_subspace 3..5), whatever X_tree.
+    if (stream % 3 == 1 && i % 2 == 0 && m.joint[i] == dy::JointType::prismatic)
+      m.axis[i] = Vec3::Unit(static_cast<int>(r.uniform(0, 2.999_r)));
   }
   if (floating) {
     m.joint[0] = dy::JointType::free;
@@ -74,6 +78,18 @@ template <int N>
 int elementary_joints(const dy::MultibodyModel<N>& m) {
   int n = 0;
   for (int i = 0; i < m.num_bodies; ++i) n += m.elementary_axis[i] >= 0 ? 1 : 0;
+  return n;
+}
+
+// Joints (not the free one) whose motion subspace finish_model marked a unit vector, linear ones
+// (prismatic along +x, +y, +z) counted in `linear`.
+template <int N>
+int unit_subspace_joints(const dy::MultibodyModel<N>& m, int& linear) {
+  int n = 0;
+  for (int i = 0; i < m.num_bodies; ++i) {
+    n += m.unit_subspace[i] >= 0 ? 1 : 0;
+    linear += m.unit_subspace[i] >= 3 ? 1 : 0;
+  }
   return n;
 }
 
@@ -206,7 +222,7 @@ KTEST(Multibody, PendulumMatchesItsClosedForm) {
 // Random fixed-base trees (half with armature and damping, a third with elementary-axis joints,
 // whose ABA path RNEA and CRBA do not share): check_consistency, Jacobians included.
 KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
-  int elementary = 0;
+  int elementary = 0, unit = 0, unit_linear = 0;
   for (std::uint32_t tree = 0; tree < 20; ++tree) {
     dy::MultibodyModel<kMax>& m = g_model;
     m = dy::MultibodyModel<kMax>();
@@ -214,10 +230,13 @@ KTEST(Multibody, AbaInvertsRneaAndCrbaAgreesOnRandomTrees) {
     KASSERT_TRUE(dy::finish_model(m) == Status::ok);
     KEXPECT_EQ(m.num_q, m.num_dofs);
     elementary += elementary_joints(m);
+    unit += unit_subspace_joints(m, unit_linear);
     RngStream r(7, tree, 2);
     check_consistency(m, r);
   }
   KEXPECT_GT(elementary, 5);
+  KEXPECT_GT(unit, elementary - 1);  // every elementary joint has a unit subspace
+  KEXPECT_GT(unit_linear, 0);
 }
 
 KTEST(Multibody, RefusesBadModelsAndInputs) {
