@@ -278,12 +278,30 @@ inline Vec6 joint_motion(const MultibodyModel<N>& m, const MultibodyData<N>& d, 
   }
 }
 
-/// Xup and S of every body at q.
+/// Xup and S of every body at q. An elementary joint's Xup (see rotate_down) is written out with
+/// the values joint_transform and compose give it: Rodrigues' terms by the axis's zeros are +0
+/// (so 1 - c + c, c, 0 - s and 0 + s remain), the product by X_tree's identity adds exact zeros
+/// to them, and r = r_tree + E_tree^T 0 = r_tree + 0.
 template <int N>
 inline void update_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q) {
   for (int i = 0; i < m.num_bodies; ++i) {
-    Transform XJ;
     const int k = m.q_index[i];
+    if (m.elementary_axis[i] >= 0) {
+      const real qi = q[k], c = std::cos(qi), s = std::sin(qi);
+      Transform& X = d.Xup[i];
+      with_axis(m.elementary_axis[i], [&](auto K) {
+        constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+        X.E(e, e) = (1 - c) + c;
+        X.E(e, i1) = X.E(e, i2) = X.E(i1, e) = X.E(i2, e) = 0;
+        X.E(i1, i1) = X.E(i2, i2) = c;
+        X.E(i1, i2) = real(0) + s;
+        X.E(i2, i1) = real(0) - s;
+      });
+      X.r = m.X_tree[i].r + Vec3::Zero();
+      d.S[i] = motion_subspace(m, i);
+      continue;
+    }
+    Transform XJ;
     joint_transform(m, i, k >= 0 ? q + k : nullptr, XJ, d.S[i]);
     d.Xup[i] = compose(XJ, m.X_tree[i]);
   }
@@ -293,6 +311,113 @@ inline void update_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, c
 template <int N>
 inline Vec6 base_acceleration(const MultibodyModel<N>& m) {
   return spatial(Vec3::Zero(), -m.gravity_w);
+}
+
+/// f(std::integral_constant<int, k>) for k = 0, 1, 2: code for an elementary axis with its indices
+/// known at compile time (runtime indices would keep the small arrays in memory).
+template <class F>
+inline void with_axis(int k, F&& f) {
+  switch (k) {
+    case 0: f(std::integral_constant<int, 0>{}); return;
+    case 1: f(std::integral_constant<int, 1>{}); return;
+    default: f(std::integral_constant<int, 2>{}); return;
+  }
+}
+
+// Body i's Xup rotation E in the products of rnea, crba and the constrained step. Where joint i is
+// elementary (elementary_axis[i] = k >= 0: revolute about +x, +y or +z of an unrotated joint
+// frame), E is zero outside its (k, k) entry and its 2 x 2 block on the other two axes, exactly:
+// update_kinematics' Rodrigues terms there are products by the axis's zeros, and the product by
+// X_tree's identity adds only exact zeros. Each component of E w, E^T f or E^T M E is then one
+// product or the sum of two, whose value does not depend on the order of the additions: the
+// entries are read as stored, so these give Eigen's 3 x 3 products bit for bit (up to the sign of
+// an exact zero), with a third of their multiplications. Every other joint takes Eigen's products.
+
+/// E w for body i's rotation E.
+template <int N>
+inline Vec3 rotate_down(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& w) {
+  if (m.elementary_axis[i] < 0) return E * w;
+  Vec3 res;
+  with_axis(m.elementary_axis[i], [&](auto K) {
+    constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+    res[e] = E(e, e) * w[e];
+    res[i1] = E(i1, i1) * w[i1] + E(i1, i2) * w[i2];
+    res[i2] = E(i2, i1) * w[i1] + E(i2, i2) * w[i2];
+  });
+  return res;
+}
+/// E^T f for body i's rotation E.
+template <int N>
+inline Vec3 rotate_up(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& f) {
+  if (m.elementary_axis[i] < 0) return E.transpose() * f;
+  Vec3 res;
+  with_axis(m.elementary_axis[i], [&](auto K) {
+    constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+    res[e] = E(e, e) * f[e];
+    res[i1] = E(i1, i1) * f[i1] + E(i2, i1) * f[i2];
+    res[i2] = E(i1, i2) * f[i1] + E(i2, i2) * f[i2];
+  });
+  return res;
+}
+/// apply_motion(Xup[i], mv): [E w; E (v - r x w)].
+template <int N>
+inline Vec6 motion_down(const MultibodyModel<N>& m, int i, const Transform& X, const Vec6& mv) {
+  const Vec3 w = ang(mv), v = lin(mv);
+  return spatial(rotate_down(m, i, X.E, w), rotate_down(m, i, X.E, Vec3(v - X.r.cross(w))));
+}
+/// apply_force_transpose(Xup[i], f): [E^T n + r x (E^T f); E^T f].
+template <int N>
+inline Vec6 force_up(const MultibodyModel<N>& m, int i, const Transform& X, const Vec6& f) {
+  const Vec3 f_a = rotate_up(m, i, X.E, lin(f));
+  return spatial(Vec3(rotate_up(m, i, X.E, ang(f)) + X.r.cross(f_a)), f_a);
+}
+/// hat(x) hat(y) with each entry written out: y_a x_b off the diagonal, -(x_a1 y_a1 + x_a2 y_a2)
+/// on it (a1, a2 the other two axes). Eigen's product of the two skew matrices sums these with
+/// exact zeros: the same bits.
+inline Mat3 hat_hat(const Vec3& x, const Vec3& y) {
+  Mat3 P;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      if (a != b) {
+        P(a, b) = y[a] * x[b];
+        continue;
+      }
+      const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+      P(a, a) = -(x[a1] * y[a1] + x[a2] * y[a2]);
+    }
+  return P;
+}
+/// rigid_to_parent(Xup[i], I) (RBDA eq. 2.66), the same bits: E^T Ibar E as (E^T Ibar) E, as
+/// Eigen associates it, and the two products of skew matrices by hat_hat.
+template <int N>
+inline RigidInertia inertia_up(const MultibodyModel<N>& m, int i, const Transform& X, const RigidInertia& I) {
+  const Mat3& E = X.E;
+  const Vec3 g = rotate_up(m, i, E, I.h);
+  RigidInertia o;
+  o.m = I.m;
+  o.h = g + I.m * X.r;
+  Mat3 A;
+  if (m.elementary_axis[i] < 0) {
+    A = E.transpose() * I.Ibar * E;
+  } else {
+    with_axis(m.elementary_axis[i], [&](auto K) {
+      constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+      Mat3 T;  // E^T Ibar
+      for (int l = 0; l < 3; ++l) {
+        T(e, l) = E(e, e) * I.Ibar(e, l);
+        T(i1, l) = E(i1, i1) * I.Ibar(i1, l) + E(i2, i1) * I.Ibar(i2, l);
+        T(i2, l) = E(i1, i2) * I.Ibar(i1, l) + E(i2, i2) * I.Ibar(i2, l);
+      }
+      for (int a = 0; a < 3; ++a) {  // (E^T Ibar) E
+        A(a, e) = T(a, e) * E(e, e);
+        A(a, i1) = T(a, i1) * E(i1, i1) + T(a, i2) * E(i2, i1);
+        A(a, i2) = T(a, i1) * E(i1, i2) + T(a, i2) * E(i2, i2);
+      }
+    });
+  }
+  // Ibar_A = E^T Ibar E - r x (g x) - (h_A x)(r x).
+  o.Ibar = A - hat_hat(X.r, g) - hat_hat(o.h, X.r);
+  return o;
 }
 
 }  // namespace detail
@@ -333,8 +458,8 @@ void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd
     const Vec6 vJ = k >= 0 ? detail::joint_motion(m, d, i, qd + k) : Vec6::Zero();
     const Vec6 vp = p >= 0 ? d.v[p] : Vec6::Zero();
     const Vec6 ap = p >= 0 ? d.a[p] : a0;
-    d.v[i] = apply_motion(d.Xup[i], vp) + vJ;
-    d.a[i] = apply_motion(d.Xup[i], ap) + cross_motion(d.v[i], vJ);
+    d.v[i] = detail::motion_down(m, i, d.Xup[i], vp) + vJ;
+    d.a[i] = detail::motion_down(m, i, d.Xup[i], ap) + cross_motion(d.v[i], vJ);
     if (k >= 0) d.a[i] += detail::joint_motion(m, d, i, qdd + k);
     d.f[i] = inertia_times(m.body[i], d.a[i]) + cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
     if (f_ext != nullptr) d.f[i] -= f_ext[i];
@@ -346,7 +471,7 @@ void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd
     } else if (k >= 0) {
       tau[k] = detail::column_dot(m, d, i, 0, d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
     }
-    if (p >= 0) d.f[p] += apply_force_transpose(d.Xup[i], d.f[i]);
+    if (p >= 0) d.f[p] += detail::force_up(m, i, d.Xup[i], d.f[i]);
   }
 }
 }  // namespace detail
@@ -374,7 +499,7 @@ void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int l
   // is one; about 3x fewer operations per body than the 6 x 6 X^T I X).
   for (int i = 0; i < m.num_bodies; ++i) d.Ic[i] = rigid_inertia(m.body[i]);
   for (int i = m.num_bodies - 1; i >= 0; --i)
-    if (m.parent[i] >= 0) d.Ic[m.parent[i]] += rigid_to_parent(d.Xup[i], d.Ic[i]);
+    if (m.parent[i] >= 0) d.Ic[m.parent[i]] += detail::inertia_up(m, i, d.Xup[i], d.Ic[i]);
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k0 = m.dof_index[i];
     for (int c = 0; c < joint_dofs(m, i); ++c) {  // each of joint i's columns
@@ -384,7 +509,7 @@ void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int l
         H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::column_dot(m, d, i, c2, F);
       H[ld * k + k] += m.armature[i];
       for (int j = i; m.parent[j] >= 0;) {
-        F = apply_force_transpose(d.Xup[j], F);
+        F = detail::force_up(m, j, d.Xup[j], F);
         j = m.parent[j];
         const int kj = m.dof_index[j];
         for (int cj = 0; cj < joint_dofs(m, j); ++cj)
@@ -431,17 +556,6 @@ struct LaneTransform {
   LaneMat<T, 3> E;
   LaneVec3<T> r;
 };
-
-/// f(std::integral_constant<int, k>) for k = 0, 1, 2: code for an elementary axis with its indices
-/// known at compile time (runtime indices would keep the small arrays in memory).
-template <class F>
-inline void with_axis(int k, F&& f) {
-  switch (k) {
-    case 0: f(std::integral_constant<int, 0>{}); return;
-    case 1: f(std::integral_constant<int, 1>{}); return;
-    default: f(std::integral_constant<int, 2>{}); return;
-  }
-}
 
 /// Forward dynamics over any lane type T (real: one robot; Lanes<L>: L robots of one model),
 /// Featherstone's articulated-body algorithm (RBDA table 7.1) with every spatial product written
