@@ -376,15 +376,15 @@ inline Vec6 force_up(const MultibodyModel<N>& m, int i, const Transform& X, cons
 /// exact zeros: the same bits.
 inline Mat3 hat_hat(const Vec3& x, const Vec3& y) {
   Mat3 P;
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) {
-      if (a != b) {
-        P(a, b) = y[a] * x[b];
-        continue;
-      }
-      const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
-      P(a, a) = -(x[a1] * y[a1] + x[a2] * y[a2]);
-    }
+  P(0, 0) = -(x[1] * y[1] + x[2] * y[2]);
+  P(1, 1) = -(x[2] * y[2] + x[0] * y[0]);
+  P(2, 2) = -(x[0] * y[0] + x[1] * y[1]);
+  P(0, 1) = y[0] * x[1];
+  P(0, 2) = y[0] * x[2];
+  P(1, 0) = y[1] * x[0];
+  P(1, 2) = y[1] * x[2];
+  P(2, 0) = y[2] * x[0];
+  P(2, 1) = y[2] * x[1];
   return P;
 }
 /// rigid_to_parent(Xup[i], I) (RBDA eq. 2.66), the same bits: E^T Ibar E as (E^T Ibar) E, as
