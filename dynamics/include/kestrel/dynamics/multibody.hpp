@@ -333,31 +333,37 @@ inline void with_axis(int k, F&& f) {
 // entries are read as stored, so these give Eigen's 3 x 3 products bit for bit (up to the sign of
 // an exact zero), with a third of their multiplications. Every other joint takes Eigen's products.
 
-/// E w for body i's rotation E.
-template <int N>
-inline Vec3 rotate_down(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& w) {
-  if (m.elementary_axis[i] < 0) return E * w;
+/// E w (kTranspose false) or E^T w (true) for body i's rotation E.
+template <bool kTranspose, int N>
+inline Vec3 rotate_body(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& w) {
+  if (m.elementary_axis[i] < 0) {
+    if constexpr (kTranspose) return E.transpose() * w;
+    else return E * w;
+  }
+  const auto at = [&E](auto r, auto c) -> real {
+    if constexpr (kTranspose) return E(decltype(c)::value, decltype(r)::value);
+    else return E(decltype(r)::value, decltype(c)::value);
+  };
+  using std::integral_constant;
   Vec3 res;
   with_axis(m.elementary_axis[i], [&](auto K) {
     constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
-    res[e] = E(e, e) * w[e];
-    res[i1] = E(i1, i1) * w[i1] + E(i1, i2) * w[i2];
-    res[i2] = E(i2, i1) * w[i1] + E(i2, i2) * w[i2];
+    using Ke = integral_constant<int, e>;
+    using K1 = integral_constant<int, i1>;
+    using K2 = integral_constant<int, i2>;
+    res[e] = at(Ke{}, Ke{}) * w[e];
+    res[i1] = at(K1{}, K1{}) * w[i1] + at(K1{}, K2{}) * w[i2];
+    res[i2] = at(K2{}, K1{}) * w[i1] + at(K2{}, K2{}) * w[i2];
   });
   return res;
 }
-/// E^T f for body i's rotation E.
+template <int N>
+inline Vec3 rotate_down(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& w) {
+  return rotate_body<false>(m, i, E, w);
+}
 template <int N>
 inline Vec3 rotate_up(const MultibodyModel<N>& m, int i, const Mat3& E, const Vec3& f) {
-  if (m.elementary_axis[i] < 0) return E.transpose() * f;
-  Vec3 res;
-  with_axis(m.elementary_axis[i], [&](auto K) {
-    constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
-    res[e] = E(e, e) * f[e];
-    res[i1] = E(i1, i1) * f[i1] + E(i2, i1) * f[i2];
-    res[i2] = E(i1, i2) * f[i1] + E(i2, i2) * f[i2];
-  });
-  return res;
+  return rotate_body<true>(m, i, E, f);
 }
 /// apply_motion(Xup[i], mv): [E w; E (v - r x w)].
 template <int N>
