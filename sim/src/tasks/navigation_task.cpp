@@ -54,6 +54,12 @@ float navigation_clearance_reward(float nearest_m, const NavigationRewardParams&
   return pen * (1.0f - std::max(nearest_m, 0.0f) / d0);
 }
 
+float navigation_sideslip_reward(float lateral_speed_m_s, const NavigationRewardParams& p) {
+  const float pen = static_cast<float>(p.sideslip_penalty);
+  if (pen == 0.0f || !std::isfinite(lateral_speed_m_s)) return 0.0f;
+  return pen * std::fabs(lateral_speed_m_s);
+}
+
 int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level) {
   // Compared in float32, as the reference's tensor comparison is.
   const float rate = static_cast<float>(success_rate);
@@ -254,6 +260,8 @@ class NavigationTask final : public Task {
       float r = navigation_reward(e_v, &err_prev_[i * 3], crash, &action_[i * kNavActionDim],
                                   &action_prev_[i * kNavActionDim], progress, p_.reward);
       if (p_.reward.clearance_penalty != 0 && !crash) r += navigation_clearance_reward(nearest_range_m(env), p_.reward);
+      if (p_.reward.sideslip_penalty != 0 && !crash)
+        r += navigation_sideslip_reward(static_cast<float>(sim_->base_lin_vel_b()[i * 3 + 1]), p_.reward);
       for (int k = 0; k < 3; ++k) err_prev_[i * 3 + k] = e_v[k];
       // The reference's episode end: a crash terminates; the time limit truncates, a success
       // when within the radius of the goal then (arriving does not end the episode).

@@ -77,6 +77,17 @@ TEST(NavigationReward, ClearanceTerm) {
   EXPECT_EQ(navigation_clearance_reward(std::nanf(""), p), 0.0f);
 }
 
+// The sideslip term (not the reference's, off by default): sideslip_penalty x |v_y|.
+TEST(NavigationReward, SideslipTerm) {
+  NavigationRewardParams p;
+  EXPECT_EQ(navigation_sideslip_reward(0.7f, p), 0.0f);  // off by default: the reference's reward
+  p.sideslip_penalty = -2.0f;
+  EXPECT_FLOAT_EQ(navigation_sideslip_reward(0.5f, p), -1.0f);
+  EXPECT_FLOAT_EQ(navigation_sideslip_reward(-0.5f, p), -1.0f);  // either side
+  EXPECT_EQ(navigation_sideslip_reward(0.0f, p), 0.0f);
+  EXPECT_EQ(navigation_sideslip_reward(std::nanf(""), p), 0.0f);
+}
+
 TEST(NavigationReward, CurriculumRule) {
   NavigationCurriculum c;  // 0..10, +2 above 0.7, -1 below 0.6
   EXPECT_EQ(next_curriculum_level(c, 0.71, 3), 5);
@@ -180,6 +191,32 @@ TEST(NavigationTask, ClearancePenaltyFromTheNearestRay) {
   const float term = navigation_clearance_reward(static_cast<float>(nearest), with.reward);
   EXPECT_LT(term, -2.0f);
   EXPECT_FLOAT_EQ(b->rewards()[0], a->rewards()[0] + term);  // the task's range went through the image's normalisation
+}
+
+// With sideslip_penalty set, a robot drifting sideways gets the sideslip term of its body-frame
+// v_y after the step on top of the reference's reward; the same step without it does not; a
+// robot flying straight ahead gets (almost) none.
+TEST(NavigationTask, SideslipPenaltyFromTheBodyVelocity) {
+  NavigationParams with;
+  with.reward.sideslip_penalty = -3;
+  auto a = build(nav_config(2, 5));
+  auto b = build(nav_config(2, 5), with);
+  ASSERT_TRUE(a && b);
+  for (Task* t : {a.get(), b.get()}) {
+    RigidBodyState& st = world_of(*t).robot_state(0, 0);
+    st.position_w = Vec3(0, 0, 1.5_r);
+    st.orientation_wb = Quat::Identity();
+    st.linvel_w = Vec3(0, 1.2_r, 0);  // sideways (body +y)
+  }
+  const std::vector<float> zero(2 * 3, 0.0f);
+  a->step(zero.data());
+  b->step(zero.data());
+  ASSERT_EQ(a->terminations()[0], 0);
+  const real v_y = b->simulator().base_lin_vel_b()[1];  // body frame, after the step
+  EXPECT_GT(v_y, 0.5_r);  // still drifting one env-step later
+  const float term = navigation_sideslip_reward(static_cast<float>(v_y), with.reward);
+  EXPECT_LT(term, -1.5f);
+  EXPECT_FLOAT_EQ(b->rewards()[0], a->rewards()[0] + term);
 }
 
 // The reference's episode end: arriving does not end the episode; at the time limit an episode

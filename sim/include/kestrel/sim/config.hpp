@@ -279,6 +279,12 @@ struct NavigationRewardParams {
   // view is about to lose at its edge, where most crashes of trained policies happen).
   real clearance_penalty = 0.0f;
   real clearance_m = 1.0f;
+  // Not in the reference (0 turns it off, the default): the reward per env-step per m/s of the
+  // vehicle's sideways speed |v_y| (body frame) after the step (training shaping: with
+  // forward-only commands the velocity lags the heading while the vehicle turns, and trained
+  // policies skid into obstacles their view has already passed; stop 43's crash geometry in
+  // bench/results/python/README.md).
+  real sideslip_penalty = 0.0f;
 };
 
 /// How navigation_task's actions become the velocity controller's [vx, vy, vz, yaw_rate] command.

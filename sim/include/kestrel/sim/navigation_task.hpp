@@ -46,7 +46,9 @@
 //     one image cannot tell an obstacle it turns away from from one it approaches;
 //   - an optional clearance term, off by default (NavigationRewardParams::clearance_penalty): a
 //     penalty per env-step growing as the nearest ray of the range image falls within clearance_m,
-//     for training (navigation_clearance_reward).
+//     for training (navigation_clearance_reward);
+//   - an optional sideslip term, off by default (NavigationRewardParams::sideslip_penalty): a
+//     penalty per env-step on the body-frame sideways speed, for training (navigation_sideslip_reward).
 #pragma once
 
 #include <memory>
@@ -86,6 +88,10 @@ float navigation_reward(const float pos_error[3], const float prev_pos_error[3],
 /// env-step for the nearest range nearest_m (m) of the robot's range image,
 /// clearance_penalty x (1 - nearest_m / clearance_m) within clearance_m, else 0.
 float navigation_clearance_reward(float nearest_m, const NavigationRewardParams& p);
+
+/// The sideslip term (not the reference's; p.sideslip_penalty 0 turns it off): sideslip_penalty x
+/// |v_y| for the body-frame sideways speed v_y (m/s) after the step; 0 for a non-finite v_y.
+float navigation_sideslip_reward(float lateral_speed_m_s, const NavigationRewardParams& p);
 
 /// The reference's update_curriculim_level: the next level after a window with this success rate.
 int next_curriculum_level(const NavigationCurriculum& c, double success_rate, int level);
