@@ -635,7 +635,7 @@ const Schema<NavigationRewardParams>& navigation_reward_schema() {
                                             "nearest obstacle in the range image, rising linearly to 0 at clearance_m"),
       real_f<S>("clearance_m", &S::clearance_m, "m", 1e-3, 1e3, "where clearance_penalty starts"),
       KESTREL_REWARD_ROW(sideslip_penalty, "not in the reference (0: off): the reward per env-step per m/s of the "
-                                           "vehicle's sideways speed |v_y| in the body frame"),
+                                           "vehicle's sideways speed (the size of v_y in the body frame)"),
   };
 #undef KESTREL_REWARD_ROW
   static const Schema<S> s{"task.navigation.reward", "Aerial Gym's navigation_task_config.reward_parameters (float32)", f,
