@@ -38,10 +38,9 @@ obs, _ = env.reset(seed=1000004)
 sim = env.task.simulator
 k = sim.num_range_images - 1
 rays = sim.range_image_rays(k)
-print("mount", [a[:2] for a in sim.sensor_mounts(k)])
+assert all(np.allclose(m, m0) for m, m0 in zip(sim.sensor_mounts(k), ([0, 0, 0], [0, 0, 0, 1])))  # ray directions are body-frame
 dirs = rays["dirs_s"].reshape(-1, 3); vs = rays["value_scale_m"]
 done = np.zeros(n, bool); rec = []
-last = {}
 while not done.all():
     with torch.no_grad():
         a = actor(torch.from_numpy(np.asarray(obs, np.float32))).numpy()

@@ -194,8 +194,7 @@ TEST(NavigationTask, ClearancePenaltyFromTheNearestRay) {
 }
 
 // With sideslip_penalty set, a robot drifting sideways gets the sideslip term of its body-frame
-// v_y after the step on top of the reference's reward; the same step without it does not; a
-// robot flying straight ahead gets (almost) none.
+// v_y after the step on top of the reference's reward; the same step without it does not.
 TEST(NavigationTask, SideslipPenaltyFromTheBodyVelocity) {
   NavigationParams with;
   with.reward.sideslip_penalty = -3;
