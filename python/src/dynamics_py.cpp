@@ -148,7 +148,7 @@ void bind_dynamics(nb::module_& m) {
             dy::Transform X_world[kPyMaxBodies];
             dy::forward_kinematics(s.model, s.data, q.data(), X_world);
             real* J = new real[6 * n];
-            dy::point_jacobian(s.model, s.data, X_world, body, kestrel::Vec3(point.data()[0], point.data()[1], point.data()[2]), J,
+            dy::point_jacobian(s.model, X_world, body, kestrel::Vec3(point.data()[0], point.data()[1], point.data()[2]), J,
                                static_cast<int>(n));
             nb::capsule owner(J, [](void* p) noexcept { delete[] static_cast<real*>(p); });
             return nb::ndarray<nb::numpy, real, nb::ndim<2>>(J, {6, n}, owner);

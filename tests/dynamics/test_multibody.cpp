@@ -123,7 +123,7 @@ void check_point_jacobians(const dy::MultibodyModel<kMax>& m, const real* q, con
   dy::forward_kinematics(m, d2, q, X_world);
   for (int b = 0; b < m.num_bodies; ++b) {
     const Vec3 p_b(r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r), r.uniform(-0.2_r, 0.2_r));
-    dy::point_jacobian(m, d2, X_world, b, p_b, J, kDofs);
+    dy::point_jacobian(m, X_world, b, p_b, J, kDofs);
     const Mat3 Et = X_world[b].E.transpose();
     const Vec3 w_b = dy::ang(g_data.v[b]), v_b = dy::lin(g_data.v[b]);
     const Vec3 want_v = Et * (v_b + w_b.cross(p_b)), want_w = Et * w_b;

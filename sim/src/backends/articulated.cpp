@@ -677,7 +677,7 @@ class ArticulatedSimulator final : public Simulator {
     real J[6 * kDofs];
     const real* f = &link_push_w_[ei * 3 * static_cast<std::size_t>(m.num_bodies)];
     for (int b = 0; b < m.num_bodies; ++b) {
-      dy::point_jacobian(m, w.data, w.scratch.X_world, b, m.body[b].com, J, kDofs);
+      dy::point_jacobian(m, w.scratch.X_world, b, m.body[b].com, J, kDofs);
       for (int c = 0; c < m.num_dofs; ++c)
         tau[c] += J[c] * f[3 * b] + J[kDofs + c] * f[3 * b + 1] + J[2 * kDofs + c] * f[3 * b + 2];
     }

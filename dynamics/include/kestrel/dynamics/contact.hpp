@@ -357,10 +357,10 @@ template <int N, int C, int W = 1>
   for (int c = 0; c < num_contacts; ++c) {
     const ContactPoint& ct = contacts[c];
     const Transform& Xb = cd.X_world[ct.body];
-    point_jacobian(m, d, cd.X_world, ct.body, Vec3(Xb.E * (ct.point_w - Xb.r)), Jp, kDofs);
+    point_jacobian(m, cd.X_world, ct.body, Vec3(Xb.E * (ct.point_w - Xb.r)), Jp, kDofs);
     if (ct.body_b >= 0) {  // the relative velocity: body's point minus body_b's point at the same place
       const Transform& Xo = cd.X_world[ct.body_b];
-      point_jacobian(m, d, cd.X_world, ct.body_b, Vec3(Xo.E * (ct.point_w - Xo.r)), Jq, kDofs);
+      point_jacobian(m, cd.X_world, ct.body_b, Vec3(Xo.E * (ct.point_w - Xo.r)), Jq, kDofs);
       for (int k = 0; k < 3 * kDofs; ++k) Jp[k] -= Jq[k];
     }
     Vec3 t1, t2;

@@ -89,7 +89,7 @@ template <int N>
   error(e, pos_err, rot_err);
   int it = 0;
   for (; it < p.iterations && e.norm() > p.tolerance_m; ++it) {
-    point_jacobian(m, d, X, body, point_b, J, kDofs);
+    point_jacobian(m, X, body, point_b, J, kDofs);
     for (int i = 0; i < m.num_bodies; ++i)  // only one-dof joints move
       if (m.joint[i] == JointType::free)
         for (int c = 0; c < 6; ++c)

@@ -84,12 +84,13 @@ struct MultibodyModel {
 
 template <int kMaxBodies>
 struct MultibodyData {
+  // No motion subspace S: a revolute or prismatic joint's is constant in its frame, so it is the
+  // model's (detail::motion_subspace); storing it per call was 4 % of aba.
   Transform Xup[kMaxBodies];  // parent frame -> body frame at the current q
-  Vec6 S[kMaxBodies];         // joint motion subspace (zero for fixed joints)
   Vec6 v[kMaxBodies], a[kMaxBodies], f[kMaxBodies], c[kMaxBodies], pA[kMaxBodies], U[kMaxBodies];
   Mat6 IA[kMaxBodies];         // ABA's articulated inertias
   RigidInertia Ic[kMaxBodies];  // CRBA's composite inertias
-  real d[kMaxBodies] = {}, u[kMaxBodies] = {};
+  real inv_d[kMaxBodies] = {}, u[kMaxBodies] = {};  // ABA: 1 / (S^T Ia S + rotor), tau - S^T pA
 };
 
 /// The largest number of velocity coordinates of a model of capacity N: N + 5 (one floating base
@@ -180,7 +181,7 @@ inline Vec6 motion_subspace(const MultibodyModel<N>& m, int i) {
 /// X_J(q) and the motion subspace S of joint i (RBDA table 4.1: revolute E = rot(axis, q)^T,
 /// prismatic r = axis q).
 template <int N>
-inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, Transform& XJ, Vec6& S) {
+inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, Transform& XJ) {
   const Vec3& a = m.axis[i];
   const real q = qi != nullptr ? qi[0] : real(0);
   XJ = Transform();
@@ -192,23 +193,19 @@ inline void joint_transform(const MultibodyModel<N>& m, int i, const real* qi, T
           t * a[0] * a[1] + s * a[2], t * a[1] * a[1] + c, t * a[1] * a[2] - s * a[0],   //
           t * a[0] * a[2] - s * a[1], t * a[1] * a[2] + s * a[0], t * a[2] * a[2] + c;
       XJ.E = R.transpose();
-      S = motion_subspace(m, i);
       return;
     }
     case JointType::prismatic:
       XJ.r = a * q;
-      S = motion_subspace(m, i);
       return;
     case JointType::fixed:
-      S = Vec6::Zero();
       return;
     case JointType::free: {
       // World -> base: E = R^T with R the quaternion's rotation base -> world; r = the base's
-      // position. S is constant (joint_column): unused here.
+      // position.
       const Quat Q(qi[6], qi[3], qi[4], qi[5]);  // wxyz constructor from [x y z w]
       XJ.E = Q.toRotationMatrix().transpose();
       XJ.r = Vec3(qi[0], qi[1], qi[2]);
-      S = Vec6::Zero();
       return;
     }
   }
@@ -221,32 +218,32 @@ inline int free_column_component(int c) { return c < 3 ? 3 + c : c - 3; }
 /// joint, the base-frame unit motions in the velocity coordinates' order [v; w] (linear first, as
 /// Pinocchio), which are spatial [0; e_c] for c < 3 and [e_(c-3); 0] after.
 template <int N>
-inline Vec6 joint_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c) {
-  if (m.joint[i] != JointType::free) return d.S[i];
+inline Vec6 joint_column(const MultibodyModel<N>& m, int i, int c) {
+  if (m.joint[i] != JointType::free) return motion_subspace(m, i);
   Vec6 s = Vec6::Zero();
   s[free_column_component(c)] = 1;
   return s;
 }
 
-/// joint_column(m, d, i, c) . f without forming the column: for the free joint, whose columns are
+/// joint_column(m, i, c) . f without forming the column: for the free joint, whose columns are
 /// unit vectors, the one component of f it picks (CRBA and RNEA take these dot products for every
 /// column of the base against every body's force; forming and summing a six-vector of zeros for
 /// each was a fifth of CRBA).
 template <int N>
-inline real column_dot(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const Vec6& f) {
+inline real column_dot(const MultibodyModel<N>& m, int i, int c, const Vec6& f) {
   if (m.joint[i] == JointType::free) return f[free_column_component(c)];
   if (m.unit_subspace[i] >= 0) return f[m.unit_subspace[i]];  // S = e_c: the same value as the dot product
-  return d.S[i].dot(f);
+  return motion_subspace(m, i).dot(f);
 }
 
-/// I S for joint column c of body i (rigid_times(I, joint_column(m, d, i, c))) without the
+/// I S for joint column c of body i (rigid_times(I, joint_column(m, i, c))) without the
 /// products by S's zeros where S is a unit vector e_u (a free joint's columns, an axis-aligned
 /// joint): I e_u is [Ibar e_u; -h x e_u] for an angular u, [h x e_v; m e_v] for a linear one
 /// (v = u - 3), the values rigid_times gives.
 template <int N>
-inline Vec6 inertia_column(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, int c, const RigidInertia& I) {
+inline Vec6 inertia_column(const MultibodyModel<N>& m, int i, int c, const RigidInertia& I) {
   const int u = m.joint[i] == JointType::free ? free_column_component(c) : m.unit_subspace[i];
-  if (u < 0) return rigid_times(I, d.S[i]);
+  if (u < 0) return rigid_times(I, motion_subspace(m, i));
   Vec6 F;
   const Vec3& h = I.h;
   if (u < 3) {
@@ -270,15 +267,15 @@ inline Vec6 inertia_column(const MultibodyModel<N>& m, const MultibodyData<N>& d
 
 /// S qd for joint i's coordinates starting at qd (nullptr or a fixed joint: zero).
 template <int N>
-inline Vec6 joint_motion(const MultibodyModel<N>& m, const MultibodyData<N>& d, int i, const real* v) {
+inline Vec6 joint_motion(const MultibodyModel<N>& m, int i, const real* v) {
   switch (m.joint[i]) {
     case JointType::fixed: return Vec6::Zero();
     case JointType::free: return spatial(Vec3(v[3], v[4], v[5]), Vec3(v[0], v[1], v[2]));
-    default: return d.S[i] * v[0];
+    default: return motion_subspace(m, i) * v[0];
   }
 }
 
-/// Xup and S of every body at q. An elementary joint's Xup (see rotate_down) is written out with
+/// Xup of every body at q. An elementary joint's Xup (see rotate_down) is written out with
 /// the values joint_transform and compose give it: Rodrigues' terms by the axis's zeros are +0
 /// (so 1 - c + c, c, 0 - s and 0 + s remain), the product by X_tree's identity adds exact zeros
 /// to them, and r = r_tree + E_tree^T 0 = r_tree + 0.
@@ -298,11 +295,10 @@ inline void update_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, c
         X.E(i2, i1) = real(0) - s;
       });
       X.r = m.X_tree[i].r + Vec3::Zero();
-      d.S[i] = motion_subspace(m, i);
       continue;
     }
     Transform XJ;
-    joint_transform(m, i, k >= 0 ? q + k : nullptr, XJ, d.S[i]);
+    joint_transform(m, i, k >= 0 ? q + k : nullptr, XJ);
     d.Xup[i] = compose(XJ, m.X_tree[i]);
   }
 }
@@ -453,7 +449,7 @@ void rnea(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, const 
           const Vec6* f_ext = nullptr);
 
 namespace detail {
-/// rnea's two passes over kinematics (Xup, S) already at q: a caller that has just run crba or
+/// rnea's two passes over kinematics (Xup) already at q: a caller that has just run crba or
 /// forward_kinematics at the same q (step_constrained) skips computing them again.
 template <int N>
 void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd, const real* qdd, real* tau,
@@ -461,21 +457,21 @@ void rnea_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* qd
   const Vec6 a0 = detail::base_acceleration(m);
   for (int i = 0; i < m.num_bodies; ++i) {
     const int k = m.dof_index[i], p = m.parent[i];
-    const Vec6 vJ = k >= 0 ? detail::joint_motion(m, d, i, qd + k) : Vec6::Zero();
+    const Vec6 vJ = k >= 0 ? detail::joint_motion(m, i, qd + k) : Vec6::Zero();
     const Vec6 vp = p >= 0 ? d.v[p] : Vec6::Zero();
     const Vec6 ap = p >= 0 ? d.a[p] : a0;
     d.v[i] = detail::motion_down(m, i, d.Xup[i], vp) + vJ;
     d.a[i] = detail::motion_down(m, i, d.Xup[i], ap) + cross_motion(d.v[i], vJ);
-    if (k >= 0) d.a[i] += detail::joint_motion(m, d, i, qdd + k);
+    if (k >= 0) d.a[i] += detail::joint_motion(m, i, qdd + k);
     d.f[i] = inertia_times(m.body[i], d.a[i]) + cross_force(d.v[i], inertia_times(m.body[i], d.v[i]));
     if (f_ext != nullptr) d.f[i] -= f_ext[i];
   }
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
     if (m.joint[i] == JointType::free) {
-      for (int c = 0; c < 6; ++c) tau[k + c] = detail::column_dot(m, d, i, c, d.f[i]);
+      for (int c = 0; c < 6; ++c) tau[k + c] = detail::column_dot(m, i, c, d.f[i]);
     } else if (k >= 0) {
-      tau[k] = detail::column_dot(m, d, i, 0, d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
+      tau[k] = detail::column_dot(m, i, 0, d.f[i]) + m.armature[i] * qdd[k] + m.damping[i] * qd[k];
     }
     if (p >= 0) d.f[p] += detail::force_up(m, i, d.Xup[i], d.f[i]);
   }
@@ -496,7 +492,7 @@ template <int N>
 void crba(const MultibodyModel<N>& m, MultibodyData<N>& d, const real* q, real* H, int ld);
 
 namespace detail {
-/// crba over kinematics (Xup, S) already at q (see rnea_passes).
+/// crba over kinematics (Xup) already at q (see rnea_passes).
 template <int N>
 void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int ld) {
   for (int r = 0; r < m.num_dofs; ++r)
@@ -510,16 +506,16 @@ void crba_passes(const MultibodyModel<N>& m, MultibodyData<N>& d, real* H, int l
     const int k0 = m.dof_index[i];
     for (int c = 0; c < joint_dofs(m, i); ++c) {  // each of joint i's columns
       const int k = k0 + c;
-      Vec6 F = detail::inertia_column(m, d, i, c, d.Ic[i]);
+      Vec6 F = detail::inertia_column(m, i, c, d.Ic[i]);
       for (int c2 = 0; c2 <= c; ++c2)  // the block of joint i itself
-        H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::column_dot(m, d, i, c2, F);
+        H[ld * k + k0 + c2] = H[ld * (k0 + c2) + k] = detail::column_dot(m, i, c2, F);
       H[ld * k + k] += m.armature[i];
       for (int j = i; m.parent[j] >= 0;) {
         F = detail::force_up(m, j, d.Xup[j], F);
         j = m.parent[j];
         const int kj = m.dof_index[j];
         for (int cj = 0; cj < joint_dofs(m, j); ++cj)
-          H[ld * k + kj + cj] = H[ld * (kj + cj) + k] = detail::column_dot(m, d, j, cj, F);
+          H[ld * k + kj + cj] = H[ld * (kj + cj) + k] = detail::column_dot(m, j, cj, F);
       }
     }
   }
@@ -572,12 +568,20 @@ struct LaneTransform {
 ///    with the skew matrix r x, about 200 multiplications where the dense 6 x 6 form takes 864;
 ///  - a revolute (prismatic) joint's U = I S takes the three angular (linear) columns of I
 ///    against the axis;
-///  - the free joint's 6 x 6 solve is a Cholesky factorisation written out (the same operations
-///    in every lane, where Eigen's LLT would differ between a scalar and a vector type);
+///  - the free joint's 6 x 6 solve is an LDL^T factorisation written out (the same operations
+///    in every lane, where Eigen's LDLT would differ between a scalar and a vector type; no
+///    square roots), and pass 3 multiplies by each joint's 1 / d from pass 2;
 ///  - a revolute joint about +x, +y or +z of an unrotated joint frame (elementary_axis) takes its
-///    rotation as the elementary one it is: a 2 x 2 block in each product;
+///    rotation as the elementary one it is: a 2 x 2 block in each product, and a symmetric block's
+///    congruence by the double angle; its c has no k components, which Ia c skips;
 ///  - a joint's sine and cosine come from the kernel's sin_cos: in float the same bits on the host
 ///    and the MCUs (libm's sinf and cosf differ between glibc and newlib).
+/// Every loop of a fixed small trip count carries `#pragma GCC unroll 8`: GCC 12 left the nested
+/// and triangular ones rolled (a switch on the index inside RM and MR ran as a branch). The
+/// rotations are lambdas forced inline (GCC had made them calls), and the working vectors live in
+/// locals that stores through d cannot alias. With the unrolling alone the 18-dof floating-base
+/// call fell from 1.16 to 1.01 us in double, with the locals to 0.94 us (1.33 us before stop 44;
+/// bench/dynamics/run.sh; instructions per call 23,000 -> 19,000 under callgrind).
 /// D is MultibodyData (T = real) or MultibodyBatchData (lanes); F the external-force vectors
 /// (nullptr: none). q, qd, tau: the coordinates, lane values; out[num_dofs] receives qdd. The
 /// inputs are checked by the callers. Returns the lanes (bit l) whose articulated inertia was
@@ -589,7 +593,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
   unsigned bad = 0;
   // out = E w and out = E^T f for body i's Xup rotation E: general, or the elementary rotation
   // about axis k = elementary_axis[i] (E's c = E(i1, i1), s = E(i1, i2); see finish_model).
-  const auto rotate = [](const auto& E, int k, const T* w, T* res) {
+  const auto rotate = [](const auto& E, int k, const T* w, T* res) __attribute__((always_inline)) {
     if (k >= 0) {
       with_axis(k, [&](auto K) {
         constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
@@ -600,9 +604,10 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
       });
       return;
     }
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) res[r] = (E(r, 0) * w[0] + E(r, 1) * w[1]) + E(r, 2) * w[2];
   };
-  const auto rotate_t = [](const auto& E, int k, const T* f, T* res) {
+  const auto rotate_t = [](const auto& E, int k, const T* f, T* res) __attribute__((always_inline)) {
     if (k >= 0) {
       with_axis(k, [&](auto K) {
         constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
@@ -613,6 +618,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
       });
       return;
     }
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) res[r] = (E(0, r) * f[0] + E(1, r) * f[1]) + E(2, r) * f[2];
   };
   // Pass 1, base to tips: Xup = X_J(q) X_tree, velocities, velocity-product accelerations c,
@@ -622,8 +628,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     const Transform& Xt = m.X_tree[i];
     const Vec3& ax = m.axis[i];
     auto& X = d.Xup[i];
-    auto& v = d.v[i];
-    auto& c = d.c[i];
+    T v[6], c[6];  // locals, stored at the end: stores through d could alias what is read next
     T vJ[6] = {};
     switch (m.joint[i]) {
       case JointType::revolute: {
@@ -635,7 +640,9 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
           // About +x, +y or +z with E_tree = 1: E = R^T has c, s at (i1, i1), (i1, i2), (i2, i1), (i2, i2).
           with_axis(ek, [&](auto K) {
             constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+            #pragma GCC unroll 8
             for (int r = 0; r < 3; ++r) {
+              #pragma GCC unroll 8
               for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = T{};
               X.r[r] = splat<T>(Xt.r[r]);
             }
@@ -662,24 +669,33 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         R[2][0] = t * xz - sy;
         R[2][1] = t * yz + sx;
         R[2][2] = t * zz + co;
+        #pragma GCC unroll 8
         for (int r = 0; r < 3; ++r)
+          #pragma GCC unroll 8
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = R[0][r] * Xt.E(0, cc) + R[1][r] * Xt.E(1, cc) + R[2][r] * Xt.E(2, cc);
+        #pragma GCC unroll 8
         for (int r = 0; r < 3; ++r) X.r[r] = splat<T>(Xt.r[r]);
+        #pragma GCC unroll 8
         for (int a = 0; a < 3; ++a) vJ[a] = qd[k] * ax[a];
         break;
       }
       case JointType::prismatic: {
         // E = E_tree; r = r_tree + E_tree^T (axis q).
         const Vec3 g = Xt.E.transpose() * ax;
+        #pragma GCC unroll 8
         for (int r = 0; r < 3; ++r) {
+          #pragma GCC unroll 8
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
           X.r[r] = Xt.r[r] + g[r] * q[kq];
         }
+        #pragma GCC unroll 8
         for (int a = 0; a < 3; ++a) vJ[3 + a] = qd[k] * ax[a];
         break;
       }
       case JointType::fixed:
+        #pragma GCC unroll 8
         for (int r = 0; r < 3; ++r) {
+          #pragma GCC unroll 8
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = splat<T>(Xt.E(r, cc));
           X.r[r] = splat<T>(Xt.r[r]);
         }
@@ -699,10 +715,13 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         R[2][0] = tx * z - ty * w;
         R[2][1] = ty * z + tx * w;
         R[2][2] = one - (tx * x + ty * y);
+        #pragma GCC unroll 8
         for (int r = 0; r < 3; ++r) {
+          #pragma GCC unroll 8
           for (int cc = 0; cc < 3; ++cc) X.E(r, cc) = R[0][r] * Xt.E(0, cc) + R[1][r] * Xt.E(1, cc) + R[2][r] * Xt.E(2, cc);
           X.r[r] = Xt.r[r] + (Xt.E(0, r) * q[kq] + Xt.E(1, r) * q[kq + 1] + Xt.E(2, r) * q[kq + 2]);
         }
+        #pragma GCC unroll 8
         for (int a = 0; a < 3; ++a) {
           vJ[a] = qd[k + 3 + a];
           vJ[3 + a] = qd[k + a];
@@ -719,11 +738,13 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
       T ew[3], el[3];
       rotate(X.E, m.elementary_axis[i], wp, ew);
       rotate(X.E, m.elementary_axis[i], lw, el);
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r) {
         v[r] = ew[r] + vJ[r];
         v[3 + r] = el[r] + vJ[3 + r];
       }
     } else {
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) v[r] = vJ[r];
     }
     if (m.elementary_axis[i] >= 0) {
@@ -739,63 +760,89 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         c[3 + i2] = -(v[3 + i1] * w);
       });
     } else {
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r) {
         const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
         c[r] = v[r1] * vJ[r2] - v[r2] * vJ[r1];
         c[3 + r] = (v[r1] * vJ[3 + r2] - v[r2] * vJ[3 + r1]) + (v[3 + r1] * vJ[r2] - v[3 + r2] * vJ[r1]);
       }
     }
+    #pragma GCC unroll 8
+    for (int r = 0; r < 6; ++r) {
+      d.v[i][r] = v[r];
+      d.c[i][r] = c[r];
+    }
     // The body's inertia at its origin as blocks [Ibar, h x; h x^T, m 1] (RBDA eq. 2.63; rigid_inertia's
     // numbers, written out: calling rigid_inertia here made GCC stop inlining it on the MCUs, +12 %
     // instructions for ABA and +4 % for CRBA on the M4F): Ibar = Ic + m (|c|^2 1 - c c^T), h = m c.
+    // The body's numbers in locals first (the stores to I could alias them).
     const SpatialInertia& b = m.body[i];
-    const Vec3& com = b.com;
-    const real cc2 = com.dot(com);
-    auto& I = d.IA[i];
+    const real mass = b.mass;
+    const real com[3] = {b.com[0], b.com[1], b.com[2]};
+    real Ic[3][3];
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r)
+      #pragma GCC unroll 8
+      for (int cc = 0; cc < 3; ++cc) Ic[r][cc] = b.inertia_com(r, cc);
+    const real cc2 = (com[0] * com[0] + com[1] * com[1]) + com[2] * com[2];  // Eigen's dot's order
+    auto& I = d.IA[i];
+    #pragma GCC unroll 8
+    for (int r = 0; r < 3; ++r)
+      #pragma GCC unroll 8
       for (int cc = 0; cc < 3; ++cc) {
-        I(r, cc) = splat<T>(b.inertia_com(r, cc) + b.mass * ((r == cc ? cc2 : real(0)) - com[r] * com[cc]));
-        I(3 + r, 3 + cc) = splat<T>(r == cc ? b.mass : real(0));
+        I(r, cc) = splat<T>(Ic[r][cc] + mass * ((r == cc ? cc2 : real(0)) - com[r] * com[cc]));
+        I(3 + r, 3 + cc) = splat<T>(r == cc ? mass : real(0));
       }
-    const real h[3] = {b.mass * com[0], b.mass * com[1], b.mass * com[2]};
+    const real h[3] = {mass * com[0], mass * com[1], mass * com[2]};
     I(0, 3) = splat<T>(0), I(1, 4) = splat<T>(0), I(2, 5) = splat<T>(0);
     I(0, 4) = splat<T>(-h[2]), I(0, 5) = splat<T>(h[1]);
     I(1, 3) = splat<T>(h[2]), I(1, 5) = splat<T>(-h[0]);
     I(2, 3) = splat<T>(-h[1]), I(2, 4) = splat<T>(h[0]);
     // pA = v x* (I v) - f_ext, with I v = [Ic w + c x f; f], f = m (v_lin - c x w) (inertia_times).
     T f[3], n[3];
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
       const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
-      f[r] = b.mass * (v[3 + r] - (com[r1] * v[r2] - com[r2] * v[r1]));
+      f[r] = mass * (v[3 + r] - (com[r1] * v[r2] - com[r2] * v[r1]));
     }
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
       const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
-      n[r] = (b.inertia_com(r, 0) * v[0] + b.inertia_com(r, 1) * v[1] + b.inertia_com(r, 2) * v[2]) +
+      n[r] = (Ic[r][0] * v[0] + Ic[r][1] * v[1] + Ic[r][2] * v[2]) +
              (com[r1] * f[r2] - com[r2] * f[r1]);
     }
-    auto& pA = d.pA[i];
+    T pA[6];
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
       const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
       pA[r] = (v[r1] * n[r2] - v[r2] * n[r1]) + (v[3 + r1] * f[r2] - v[3 + r2] * f[r1]);
       pA[3 + r] = v[r1] * f[r2] - v[r2] * f[r1];
     }
     if (f_ext != nullptr)
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) pA[r] = pA[r] - f_ext[i][r];
+    #pragma GCC unroll 8
+    for (int r = 0; r < 6; ++r) d.pA[i][r] = pA[r];
   }
   // Pass 2, tips to base: articulated inertias and bias forces, each carried to the parent.
   for (int i = m.num_bodies - 1; i >= 0; --i) {
     const int k = m.dof_index[i], p = m.parent[i];
     if (m.joint[i] == JointType::free) continue;  // the root: solved in pass 3
+    // I is updated in place; U, c and pA are worked on in locals, which the stores to I cannot
+    // alias (through d they could, and every store made the compiler load them again).
     auto& I = d.IA[i];
-    auto& pA = d.pA[i];
-    const auto& c = d.c[i];
-    T pa[6];
+    T pA[6], c[6], pa[6];
+    #pragma GCC unroll 8
+    for (int r = 0; r < 6; ++r) {
+      pA[r] = d.pA[i][r];
+      c[r] = d.c[i][r];
+    }
     if (k >= 0) {
       // U = I S, d = S^T U (+ armature + h damping), u = tau - damping qd - S^T pA; then
       // Ia = I - U U^T / d and pa = pA + Ia c + U u / d.
       const Vec3& ax = m.axis[i];
       const int o = m.joint[i] == JointType::revolute ? 0 : 3;  // S's nonzero half
-      auto& U = d.U[i];
+      T U[6];
       const int ek = m.elementary_axis[i];
       const real rotor = m.armature[i] + implicit_damping_dt * m.damping[i];
       T dd;
@@ -803,6 +850,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         // S = [e_k; 0]: U is I's column k (its lower half from the stored B: B^T's column k is B's row k).
         with_axis(ek, [&](auto K) {
           constexpr int e = decltype(K)::value;
+          #pragma GCC unroll 8
           for (int r = 0; r < 3; ++r) {
             U[r] = I(r, e);
             U[3 + r] = I(e, 3 + r);
@@ -811,6 +859,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
           d.u[i] = (tau[k] - m.damping[i] * qd[k]) - pA[e];
         });
       } else {
+        #pragma GCC unroll 8
         for (int r = 0; r < 6; ++r) {
           // Row r of I against the axis; I's lower-left block is B^T (never stored).
           const auto e = [&](int cc) -> T { return (r < 3 || o == 3) ? I(r, o + cc) : I(o + cc, r); };
@@ -820,34 +869,61 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         d.u[i] = (tau[k] - m.damping[i] * qd[k]) - ((ax[0] * pA[o] + ax[1] * pA[o + 1]) + ax[2] * pA[o + 2]);
       }
       bad |= lanes::not_positive(dd);
-      d.d[i] = dd;
       const T inv_d = splat<T>(1) / dd;
+      d.inv_d[i] = inv_d;  // pass 3 multiplies by it: no division on its base-to-tips chain
       T Ud[6];
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) Ud[r] = U[r] * inv_d;
       // The three stored blocks, A and C by their upper triangles.
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r)
+        #pragma GCC unroll 8
         for (int cc = r; cc < 3; ++cc) {
           I(r, cc) = I(r, cc) - U[r] * Ud[cc];
           I(3 + r, 3 + cc) = I(3 + r, 3 + cc) - U[3 + r] * Ud[3 + cc];
         }
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r)
+        #pragma GCC unroll 8
         for (int cc = 0; cc < 3; ++cc) I(r, 3 + cc) = I(r, 3 + cc) - U[r] * Ud[3 + cc];
+      #pragma GCC unroll 8
       for (int r = 1; r < 3; ++r)
+        #pragma GCC unroll 8
         for (int cc = 0; cc < r; ++cc) {
           I(r, cc) = I(cc, r);
           I(3 + r, 3 + cc) = I(3 + cc, 3 + r);
         }
       const T ud = d.u[i] * inv_d;
-      for (int r = 0; r < 3; ++r) {
-        pa[r] = pA[r] + ((I(r, 0) * c[0] + I(r, 1) * c[1] + I(r, 2) * c[2]) + (I(r, 3) * c[3] + I(r, 4) * c[4] + I(r, 5) * c[5])) +
-                U[r] * ud;
-        pa[3 + r] = pA[3 + r] +
-                    ((I(0, 3 + r) * c[0] + I(1, 3 + r) * c[1] + I(2, 3 + r) * c[2]) +
-                     (I(3 + r, 3) * c[3] + I(3 + r, 4) * c[4] + I(3 + r, 5) * c[5])) +
-                    U[3 + r] * ud;
+      if (ek >= 0) {
+        // c = v x [qd e_k; 0] has zero k components (pass 1): Ia c over the other four.
+        with_axis(ek, [&](auto K) {
+          constexpr int e = decltype(K)::value, i1 = (e + 1) % 3, i2 = (e + 2) % 3;
+          #pragma GCC unroll 8
+          for (int r = 0; r < 3; ++r) {
+            pa[r] = pA[r] + ((I(r, i1) * c[i1] + I(r, i2) * c[i2]) + (I(r, 3 + i1) * c[3 + i1] + I(r, 3 + i2) * c[3 + i2])) +
+                    U[r] * ud;
+            pa[3 + r] = pA[3 + r] +
+                        ((I(i1, 3 + r) * c[i1] + I(i2, 3 + r) * c[i2]) +
+                         (I(3 + r, 3 + i1) * c[3 + i1] + I(3 + r, 3 + i2) * c[3 + i2])) +
+                        U[3 + r] * ud;
+          }
+        });
+      } else {
+        #pragma GCC unroll 8
+        for (int r = 0; r < 3; ++r) {
+          pa[r] = pA[r] + ((I(r, 0) * c[0] + I(r, 1) * c[1] + I(r, 2) * c[2]) + (I(r, 3) * c[3] + I(r, 4) * c[4] + I(r, 5) * c[5])) +
+                  U[r] * ud;
+          pa[3 + r] = pA[3 + r] +
+                      ((I(0, 3 + r) * c[0] + I(1, 3 + r) * c[1] + I(2, 3 + r) * c[2]) +
+                       (I(3 + r, 3) * c[3] + I(3 + r, 4) * c[4] + I(3 + r, 5) * c[5])) +
+                      U[3 + r] * ud;
+        }
       }
+      #pragma GCC unroll 8
+      for (int r = 0; r < 6; ++r) d.U[i][r] = U[r];  // for pass 3
     } else {
       // A fixed joint: vJ = 0, so c = 0 and pa = pA.
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) pa[r] = pA[r];
     }
     if (p < 0) continue;
@@ -863,37 +939,63 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
         const T co = X.E(i1, i1), si = X.E(i1, i2);
         const auto congruence = [&](int r0, int c0, T res[3][3]) {
           T Q[3][3];
+          #pragma GCC unroll 8
           for (int r = 0; r < 3; ++r) {
             Q[r][e] = I(r0 + r, c0 + e);
             Q[r][i1] = I(r0 + r, c0 + i1) * co - I(r0 + r, c0 + i2) * si;
             Q[r][i2] = I(r0 + r, c0 + i1) * si + I(r0 + r, c0 + i2) * co;
           }
+          #pragma GCC unroll 8
           for (int cc = 0; cc < 3; ++cc) {
             res[e][cc] = Q[e][cc];
             res[i1][cc] = co * Q[i1][cc] - si * Q[i2][cc];
             res[i2][cc] = si * Q[i1][cc] + co * Q[i2][cc];
           }
         };
-        congruence(0, 0, A1);
+        // A symmetric block M (A or C): row e rotates as a vector; the (i1, i2) block
+        // [a b; b d] -> R^T [a b; b d] R by the double angle (cos 2q = co^2 - si^2, sin 2q =
+        // 2 si co): with h = (a + d) / 2, g = (a - d) / 2 and t = g cos 2q - b sin 2q, a' = h + t,
+        // d' = h - t, b' = g sin 2q + b cos 2q. 10 multiplications where the product above takes 24.
+        const T c2 = co * co - si * si, s2 = splat<T>(2) * (si * co);
+        const auto symmetric = [&](int r0, T res[3][3]) {
+          const T me1 = I(r0 + e, r0 + i1), me2 = I(r0 + e, r0 + i2);
+          const T a = I(r0 + i1, r0 + i1), b = I(r0 + i1, r0 + i2), dd = I(r0 + i2, r0 + i2);
+          const T h = splat<T>(0.5) * (a + dd), g = splat<T>(0.5) * (a - dd);
+          const T t = g * c2 - b * s2;
+          res[e][e] = I(r0 + e, r0 + e);
+          res[e][i1] = res[i1][e] = me1 * co - me2 * si;
+          res[e][i2] = res[i2][e] = me1 * si + me2 * co;
+          res[i1][i1] = h + t;
+          res[i2][i2] = h - t;
+          res[i1][i2] = res[i2][i1] = g * s2 + b * c2;
+        };
+        symmetric(0, A1);
         congruence(0, 3, B1);
-        congruence(3, 3, C1);
+        symmetric(3, C1);
       });
     } else {
       T PA[3][3], PB[3][3], PC[3][3];  // A E, B E, C E
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r)
+        #pragma GCC unroll 8
         for (int cc = 0; cc < 3; ++cc) {
           PA[r][cc] = (I(r, 0) * X.E(0, cc) + I(r, 1) * X.E(1, cc)) + I(r, 2) * X.E(2, cc);
           PB[r][cc] = (I(r, 3) * X.E(0, cc) + I(r, 4) * X.E(1, cc)) + I(r, 5) * X.E(2, cc);
           PC[r][cc] = (I(3 + r, 3) * X.E(0, cc) + I(3 + r, 4) * X.E(1, cc)) + I(3 + r, 5) * X.E(2, cc);
         }
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r) {
+        #pragma GCC unroll 8
         for (int cc = r; cc < 3; ++cc) {
           A1[r][cc] = (X.E(0, r) * PA[0][cc] + X.E(1, r) * PA[1][cc]) + X.E(2, r) * PA[2][cc];
           C1[r][cc] = (X.E(0, r) * PC[0][cc] + X.E(1, r) * PC[1][cc]) + X.E(2, r) * PC[2][cc];
         }
+        #pragma GCC unroll 8
         for (int cc = 0; cc < 3; ++cc) B1[r][cc] = (X.E(0, r) * PB[0][cc] + X.E(1, r) * PB[1][cc]) + X.E(2, r) * PB[2][cc];
       }
+      #pragma GCC unroll 8
       for (int r = 1; r < 3; ++r)
+        #pragma GCC unroll 8
         for (int cc = 0; cc < r; ++cc) {
           A1[r][cc] = A1[cc][r];
           C1[r][cc] = C1[cc][r];
@@ -919,18 +1021,25 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     const auto c1 = [&](int r, int cc) -> const T& { return C1[r][cc]; };
     const auto b1t = [&](int r, int cc) -> const T& { return B1[cc][r]; };
     T B2[3][3];
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r)
+      #pragma GCC unroll 8
       for (int cc = 0; cc < 3; ++cc) B2[r][cc] = B1[r][cc] + RM(c1, r, cc);
     const auto b2 = [&](int r, int cc) -> const T& { return B2[r][cc]; };
     auto& Ip = d.IA[p];
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
+      #pragma GCC unroll 8
       for (int cc = r; cc < 3; ++cc) {
         Ip(r, cc) = Ip(r, cc) + ((A1[r][cc] + RM(b1t, r, cc)) - MR(b2, r, cc));
         Ip(3 + r, 3 + cc) = Ip(3 + r, 3 + cc) + C1[r][cc];
       }
+      #pragma GCC unroll 8
       for (int cc = 0; cc < 3; ++cc) Ip(r, 3 + cc) = Ip(r, 3 + cc) + B2[r][cc];
     }
+    #pragma GCC unroll 8
     for (int r = 1; r < 3; ++r)
+      #pragma GCC unroll 8
       for (int cc = 0; cc < r; ++cc) {
         Ip(r, cc) = Ip(cc, r);
         Ip(3 + r, 3 + cc) = Ip(3 + cc, 3 + r);
@@ -940,6 +1049,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     T fa[3], na[3];
     rotate_t(X.E, ek, pa + 3, fa);
     rotate_t(X.E, ek, pa, na);
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
       const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
       pp[r] = pp[r] + (na[r] + (X.r[r1] * fa[r2] - X.r[r2] * fa[r1]));
@@ -954,8 +1064,10 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     const auto& c = d.c[i];
     T ap[6];
     if (p >= 0) {
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) ap[r] = d.a[p][r];
     } else {
+      #pragma GCC unroll 8
       for (int r = 0; r < 3; ++r) {
         ap[r] = T{};
         ap[3 + r] = splat<T>(-m.gravity_w[r]);
@@ -967,6 +1079,7 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     const int ek = m.elementary_axis[i];
     rotate(X.E, ek, ap, ew);
     rotate(X.E, ek, lw, el);
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) {
       a[r] = ew[r] + c[r];
       a[3 + r] = el[r] + c[3 + r];
@@ -974,42 +1087,58 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     if (m.joint[i] == JointType::free) {
       // A six-dof joint to the world (RBDA section 9.3): the whole tree's articulated inertia IA
       // at the base takes the base wrench, so the joint's spatial acceleration y solves
-      // IA y = tau_s - pA - IA a, tau_s the wrench in spatial order [moment; force]. IA = L L^T.
+      // IA y = tau_s - pA - IA a, tau_s the wrench in spatial order [moment; force].
       const auto& I = d.IA[i];
       const auto M = [&](int r, int cc) -> T { return (r >= 3 && cc < 3) ? I(cc, r) : (r <= cc || r >= 3 ? I(r, cc) : I(cc, r)); };
       T rhs[6];
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) {
         const T ts = r < 3 ? tau[k + 3 + r] : tau[k + r - 3];
         T Ia = M(r, 0) * a[0];
+        #pragma GCC unroll 8
         for (int cc = 1; cc < 6; ++cc) Ia = Ia + M(r, cc) * a[cc];
         rhs[r] = (ts - d.pA[i][r]) - Ia;
       }
-      T L[6][6];
-      T inv_diag[6];
+      // IA = L D L^T, L unit lower triangular, with W[r][j] = L[r][j] D[j] kept: the Cholesky
+      // factor's six square roots, each on this serial chain, are not needed.
+      T L[6][6], W[6][6];
+      T inv_D[6];
+      #pragma GCC unroll 8
       for (int j = 0; j < 6; ++j) {
         T s = M(j, j);
-        for (int t = 0; t < j; ++t) s = s - L[j][t] * L[j][t];
+        #pragma GCC unroll 8
+        for (int t = 0; t < j; ++t) s = s - L[j][t] * W[j][t];
         bad |= lanes::not_positive(s);
-        L[j][j] = lanes::sqrt(s);
-        inv_diag[j] = splat<T>(1) / L[j][j];
+        inv_D[j] = splat<T>(1) / s;
+        #pragma GCC unroll 8
         for (int r = j + 1; r < 6; ++r) {
           T e = M(r, j);
-          for (int t = 0; t < j; ++t) e = e - L[r][t] * L[j][t];
-          L[r][j] = e * inv_diag[j];
+          #pragma GCC unroll 8
+          for (int t = 0; t < j; ++t) e = e - L[r][t] * W[j][t];
+          W[r][j] = e;
+          L[r][j] = e * inv_D[j];
         }
       }
       T y[6];
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) {  // L z = rhs
         T e = rhs[r];
+        #pragma GCC unroll 8
         for (int t = 0; t < r; ++t) e = e - L[r][t] * y[t];
-        y[r] = e * inv_diag[r];
+        y[r] = e;
       }
-      for (int r = 5; r >= 0; --r) {  // L^T y = z
+      #pragma GCC unroll 8
+      for (int r = 0; r < 6; ++r) y[r] = y[r] * inv_D[r];  // D w = z
+      #pragma GCC unroll 8
+      for (int r = 5; r >= 0; --r) {  // L^T y = w
         T e = y[r];
+        #pragma GCC unroll 8
         for (int t = r + 1; t < 6; ++t) e = e - L[t][r] * y[t];
-        y[r] = e * inv_diag[r];
+        y[r] = e;
       }
+      #pragma GCC unroll 8
       for (int r = 0; r < 6; ++r) a[r] = a[r] + y[r];
+      #pragma GCC unroll 8
       for (int cc = 0; cc < 3; ++cc) {
         out[k + cc] = y[3 + cc];  // linear first, as the velocity coordinates
         out[k + 3 + cc] = y[cc];
@@ -1019,14 +1148,16 @@ unsigned aba_kernel(const MultibodyModel<N>& m, D& d, const T* q, const T* qd, c
     if (k < 0) continue;
     const auto& U = d.U[i];
     T Ua = U[0] * a[0];
+    #pragma GCC unroll 8
     for (int r = 1; r < 6; ++r) Ua = Ua + U[r] * a[r];
-    const T qdd = (d.u[i] - Ua) / d.d[i];
+    const T qdd = (d.u[i] - Ua) * d.inv_d[i];
     out[k] = qdd;
     if (ek >= 0) {
       a[ek] = a[ek] + qdd;
       continue;
     }
     const int o = m.joint[i] == JointType::revolute ? 0 : 3;
+    #pragma GCC unroll 8
     for (int r = 0; r < 3; ++r) a[o + r] = a[o + r] + m.axis[i][r] * qdd;
   }
   for (int k = 0; k < m.num_dofs; ++k) bad |= lanes::not_finite(out[k]);
@@ -1055,7 +1186,7 @@ unsigned aba_input_check(const MultibodyModel<N>& m, const T* q, const T* qd, co
 /// optional external forces as rnea (with a floating base, tau's first six entries are a wrench
 /// on the base, usually zero). Status::ok; non_finite_input (qdd untouched) for a non-finite
 /// input, a base quaternion off unit length by more than 1e-3, or a singular articulated inertia
-/// (a joint with no inertia behind it). Leaves Xup, S, v, c, a at (q, qd) in d.
+/// (a joint with no inertia behind it). Leaves Xup, v, c, a at (q, qd) in d.
 ///
 /// implicit_damping_dt h > 0 solves (M + h D) qdd = tau - bias - D qd instead, D the joints'
 /// viscous damping: the accelerations of a step of length h with the damping taken at the end of
@@ -1067,7 +1198,6 @@ template <int N>
   if (detail::aba_input_check(m, q, qd, tau) != 0) return Status::non_finite_input;
   real out[max_dofs<N>()];
   if (detail::aba_kernel<real>(m, d, q, qd, tau, out, f_ext, implicit_damping_dt) != 0) return Status::non_finite_input;
-  for (int i = 0; i < m.num_bodies; ++i) d.S[i] = detail::motion_subspace(m, i);
   for (int k = 0; k < m.num_dofs; ++k) qdd[k] = out[k];
   return Status::ok;
 }
@@ -1081,7 +1211,7 @@ struct MultibodyBatchData {
   detail::LaneTransform<T> Xup[N];
   detail::LaneVec6<T> v[N], a[N], c[N], pA[N], U[N];
   detail::LaneMat<T, 6> IA[N];
-  T d[N], u[N];
+  T inv_d[N], u[N];
 };
 
 /// aba for L robots of one model at once, robot l in lane l of every value: q[num_q], qd and
@@ -1132,7 +1262,7 @@ void forward_kinematics(const MultibodyModel<N>& m, MultibodyData<N>& d, const r
 /// coordinates (Pinocchio's LOCAL_WORLD_ALIGNED frame Jacobian, rows in its linear-first order).
 /// `X_world` from forward_kinematics at the same q; `point_b` in the body's frame.
 template <int N>
-void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const Transform* X_world, int body,
+void point_jacobian(const MultibodyModel<N>& m, const Transform* X_world, int body,
                     const Vec3& point_b, real* J, int ld) {
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < m.num_dofs; ++c) J[ld * r + c] = 0;
@@ -1148,7 +1278,7 @@ void point_jacobian(const MultibodyModel<N>& m, const MultibodyData<N>& d, const
         w = c < 3 ? Vec3::Zero() : Vec3(Et.col(c - 3));
         v_p = c < 3 ? Vec3(Et.col(c)) : Vec3(X_world[j].r.cross(w) + w.cross(p_w));
       } else {
-        const Vec6& Sj = d.S[j];
+        const Vec6 Sj = detail::motion_subspace(m, j);
         w = Et * ang(Sj);
         const Vec3 v = Et * lin(Sj) + X_world[j].r.cross(w);
         v_p = v + w.cross(p_w);
