@@ -1,4 +1,4 @@
-"""The navigation_task sweep of stops 35-43 (bench/results/python/navigation_sweep.csv: one row per
+"""The navigation_task sweep of stops 35-45 (bench/results/python/navigation_sweep.csv: one row per
 evaluation of each run, 512 level-10 episodes of seed 1000003) as level-10 success over env-steps,
 one line per run, labelled by what it changed.
 
@@ -36,7 +36,7 @@ def main(argv: list[str]) -> None:
     ax.axhline(80, color="k", ls="--", lw=1, label="issue 11's goal (80 %)")
     ax.set_xlabel("env-steps (millions)")
     ax.set_ylabel("success at curriculum level 10 (%, 512 episodes of seed 1000003)")
-    ax.set_title("navigation_task, rsl_rl PPO: what each change did (2-core machine, stops 35-43)")
+    ax.set_title("navigation_task, rsl_rl PPO: what each change did (2-core machine, stops 35-45)")
     ax.set_ylim(0, 100)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the axes: one row per run
