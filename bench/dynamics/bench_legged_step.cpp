@@ -37,6 +37,7 @@
 #include <unistd.h>
 
 #include <climits>
+#include <cstdint>
 
 #include <algorithm>
 #include <chrono>
@@ -53,6 +54,7 @@
 #include "kestrel/dynamics/multibody.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/progress.hpp"
+#include "backends/articulated_batch.hpp"
 
 #ifndef KESTREL_BENCH_MODELS_DIR
 #define KESTREL_BENCH_MODELS_DIR "models"
@@ -107,6 +109,9 @@ struct Result {
   double mass_kg = 0;
   int kestrel_shapes = 0;
   SimFigures k;
+  double batch_ns = 1e300;  // Kestrel's batched step: best rep, ns per robot per physics step
+  int batch_lanes = 0;
+  bool batch_same_bits = false;  // its robots end each rep with the scalar step's state, bit for bit
   SimFigures mj[kMujocoConfigs];
   std::string mj_desc[kMujocoConfigs];
   bool ok = true;
@@ -167,7 +172,10 @@ struct KestrelSide {
     return true;
   }
 
-  kestrel::Status step() {
+  // The joint PD (tau, and the gains taken implicitly), forward_kinematics (unless poses_ready:
+  // cd.X_world already at q) and the contacts into `contacts`: everything of a physics step before
+  // the constrained step. Returns the count.
+  int prepare(dy::ContactPoint* contacts, bool poses_ready = false) {
     const auto& m = robot.multibody;
     for (int i = 0; i < m.num_bodies; ++i) {
       if (m.joint[i] != dy::JointType::revolute && m.joint[i] != dy::JointType::prismatic) continue;
@@ -180,8 +188,7 @@ struct KestrelSide {
       kp_step[k] = clipped ? real(0) : kp[k];
       kd_step[k] = clipped ? real(0) : kd[k];
     }
-    dy::ContactPoint contacts[kMaxContacts];
-    dy::forward_kinematics(m, data, q.data(), cd.X_world);
+    if (!poses_ready) dy::forward_kinematics(m, data, q.data(), cd.X_world);
     int n = dy::collide_halfspace(shapes.data(), static_cast<int>(shapes.size()), cd.X_world, ground, real(0.01), contacts,
                                   kMaxContacts);
     if (n > kMaxContacts) {
@@ -189,6 +196,13 @@ struct KestrelSide {
       n = kMaxContacts;
     }
     contacts_last = n;
+    return n;
+  }
+
+  kestrel::Status step() {
+    const auto& m = robot.multibody;
+    dy::ContactPoint contacts[kMaxContacts];
+    const int n = prepare(contacts);
     dy::ConstraintParams params;
     params.poses_current = true;  // forward_kinematics just above, as the simulator's physics step
     return dy::step_constrained(m, data, cd, q.data(), qd.data(), tau.data(), static_cast<real>(kDt), contacts, n, params,
@@ -203,6 +217,59 @@ struct KestrelSide {
   double x() const { return static_cast<double>(q[0]); }
   double y() const { return static_cast<double>(q[1]); }
   double z() const { return static_cast<double>(q[2]); }
+};
+
+// ---------------------------------------------------------------- Kestrel's batched step
+// The simulator's batched constrained step (sim/src/backends/articulated_batch.hpp): L robots
+// (the kernel copy's lanes) from the same settled state, each prepared as KestrelSide::step
+// does, then one batched step for all of them. Its time is per robot: a batch's time / L.
+struct KestrelBatchSide {
+  std::vector<std::unique_ptr<KestrelSide>> robots;
+  std::vector<std::vector<dy::ContactPoint>> contacts;
+  std::vector<std::vector<kestrel::Vec3>> forces;
+  std::vector<unsigned char> scratch;
+  void* mem = nullptr;
+
+  void init(const KestrelSide& k, int lanes) {
+    robots.clear();
+    for (int l = 0; l < lanes; ++l) robots.push_back(std::make_unique<KestrelSide>(k));
+    contacts.assign(static_cast<std::size_t>(lanes), std::vector<dy::ContactPoint>(kMaxContacts));
+    forces.assign(static_cast<std::size_t>(lanes), std::vector<kestrel::Vec3>(kMaxContacts));
+    scratch.assign(ks::legged_batch::scratch_bytes() + 64, 0);
+    mem = scratch.data() + (64 - reinterpret_cast<std::uintptr_t>(scratch.data()) % 64) % 64;
+  }
+  // True when every robot was stepped.
+  bool step() {
+    const int L = static_cast<int>(robots.size());
+    ks::legged_batch::Lane lanes[ks::legged_batch::kMaxLanes];
+    // The kinematics in the lanes (the simulator's order: they pose the collisions, then the step
+    // reuses them).
+    const real* qs[ks::legged_batch::kMaxLanes] = {};
+    dy::Transform* Xs[ks::legged_batch::kMaxLanes] = {};
+    for (int l = 0; l < L; ++l) {
+      qs[l] = robots[static_cast<std::size_t>(l)]->q.data();
+      Xs[l] = robots[static_cast<std::size_t>(l)]->cd.X_world;
+    }
+    const auto& m = robots[0]->robot.multibody;
+    ks::legged_batch::kinematics(m, qs, L, Xs, mem);
+    for (int l = 0; l < L; ++l) {
+      KestrelSide& r = *robots[static_cast<std::size_t>(l)];
+      ks::legged_batch::Lane& ln = lanes[l];
+      ln.num_contacts = r.prepare(contacts[static_cast<std::size_t>(l)].data(), true);
+      ln.q = r.q.data();
+      ln.qd = r.qd.data();
+      ln.tau = r.tau.data();
+      ln.kp = r.kp_step.data();
+      ln.kd = r.kd_step.data();
+      ln.contacts = contacts[static_cast<std::size_t>(l)].data();
+      ln.warm = &r.warm;
+      ln.contact_force_w = forces[static_cast<std::size_t>(l)].data();
+    }
+    dy::ConstraintParams params;
+    params.poses_current = true;
+    const unsigned done = ks::legged_batch::step(m, params, static_cast<real>(kDt), lanes, L, mem);
+    return done == (1u << L) - 1u;
+  }
 };
 
 // ---------------------------------------------------------------- MuJoCo's side
@@ -421,14 +488,28 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     mj_copyData(settled[i], mjs[i].m, mjs[i].d);
   }
   bool k_ok = true;
+  const KestrelSide k_settled = k;
+  KestrelBatchSide kb;
+  const int L = ks::legged_batch::eligible(k.robot.multibody) ? ks::legged_batch::lanes() : 0;
+  out.batch_lanes = L;
+  out.batch_same_bits = L > 0;
   for (int r = 0; r < reps; ++r) {
-    k.q = q_settled;
-    k.qd = qd_settled;
+    k = k_settled;
     const auto t0 = Clock::now();
     for (long i = 0; i < steps; ++i) k_ok = (k.step() == kestrel::Status::ok) && k_ok;
     const double kns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / static_cast<double>(steps);
     out.k.ns = std::min(out.k.ns, kns);
     progress_add(static_cast<double>(steps));
+    if (L > 0) {
+      kb.init(k_settled, L);
+      const auto tb = Clock::now();
+      for (long i = 0; i < steps; ++i) k_ok = kb.step() && k_ok;
+      const double bns = std::chrono::duration<double, std::nano>(Clock::now() - tb).count() / static_cast<double>(steps * L);
+      out.batch_ns = std::min(out.batch_ns, bns);
+      for (const auto& rb : kb.robots)
+        out.batch_same_bits = out.batch_same_bits && std::memcmp(rb->q.data(), k.q.data(), k.q.size() * sizeof(real)) == 0 &&
+                              std::memcmp(rb->qd.data(), k.qd.data(), k.qd.size() * sizeof(real)) == 0;
+    }
     g_sink = g_sink + k.z();
     if (r == 0) {
       out.k.rep_drift = std::hypot(k.x() - static_cast<double>(q_settled[0]), k.y() - static_cast<double>(q_settled[1]));
@@ -452,7 +533,11 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
   for (int i = 0; i < kMujocoConfigs; ++i) mj_deleteData(settled[i]);
   if (!k_ok) {
     out.ok = false;
-    out.problem += " a timed Kestrel step refused;";
+    out.problem += " a timed Kestrel step refused (or a batched robot left to the scalar step);";
+  }
+  if (L > 0 && !out.batch_same_bits) {
+    out.ok = false;
+    out.problem += " the batched step's robots differ from the scalar step's;";
   }
 
   // Do both stand? Heights against MuJoCo with the Menagerie's cone (with the file's pyramidal
@@ -536,7 +621,8 @@ int main(int argc, char** argv) {
                  "kestrel_base_z_m,mujoco_base_z_m,kestrel_normal_force_n,mujoco_normal_force_n,kestrel_pgs_sweeps_mean,"
                  "kestrel_pgs_sweeps_max,mujoco_solver_iter_mean,kestrel_contacts,mujoco_ncon,kestrel_rows,mujoco_nefc,"
                  "kestrel_shapes,kestrel_settle_drift_xy_m,mujoco_settle_drift_xy_m,kestrel_rep_drift_xy_m,"
-                 "mujoco_rep_drift_xy_m,kestrel_rep_dz_m,mujoco_rep_dz_m,stands\n",
+                 "mujoco_rep_drift_xy_m,kestrel_rep_dz_m,mujoco_rep_dz_m,stands,kestrel_batch_lanes,"
+                 "kestrel_batch_ns_per_step,mujoco_over_kestrel_batch,kestrel_batch_same_bits\n",
                  header);
   bool all_ok = true;
   for (const Result& r : results) {
@@ -550,18 +636,23 @@ int main(int argc, char** argv) {
                   s.fn, s.iters, s.iters_max, s.contacts, s.rows, 1e3 * s.settle_drift, 1e3 * s.rep_drift, 1e3 * s.rep_dz);
     };
     line("kestrel (float)", k, 1.0);
+    if (r.batch_lanes > 0)
+      std::printf("  %-30s %11.1f  (per robot, %d robots per step; the scalar step's bits: %s)\n", "kestrel batched (float)",
+                  r.batch_ns, r.batch_lanes, r.batch_same_bits ? "yes" : "NO");
     for (int i = 0; i < kMujocoConfigs; ++i) {
       const SimFigures& m = r.mj[i];
       const std::string name = std::string("mujoco ") + kMujocoConfigName[i];
       line(name.c_str(), m, m.ns / k.ns);
+      if (r.batch_lanes > 0) std::printf("  %-30s %11s %7.2f\n", "  MuJoCo / Kestrel batched", "", m.ns / r.batch_ns);
       if (f != nullptr)
         std::fprintf(f,
                      "%s,%s,%.3f,%.3f,%.1f,%.1f,%.3f,%.5f,%.5f,%.3f,%.3f,%.2f,%d,%.2f,%.2f,%.2f,%.2f,%.2f,%d,%.3g,%.3g,%.3g,%.3g,"
-                     "%.3g,%.3g,%d\n",
+                     "%.3g,%.3g,%d,%d,%.1f,%.3f,%d\n",
                      r.robot.c_str(), kMujocoConfigName[i], r.mass_kg, r.mass_kg * kG, k.ns, m.ns, m.ns / k.ns, k.height,
                      m.height, k.fn, m.fn, k.iters, k.iters_max, m.iters, k.contacts, m.contacts, k.rows, m.rows,
                      r.kestrel_shapes, k.settle_drift, m.settle_drift, k.rep_drift, m.rep_drift, k.rep_dz, m.rep_dz,
-                     r.ok ? 1 : 0);
+                     r.ok ? 1 : 0, r.batch_lanes, r.batch_lanes > 0 ? r.batch_ns : 0.0,
+                     r.batch_lanes > 0 ? m.ns / r.batch_ns : 0.0, r.batch_same_bits ? 1 : 0);
     }
     if (!r.ok) {
       std::fprintf(stderr, "kestrel_bench_legged_step: %s does not stand on every side:%s\n", r.robot.c_str(), r.problem.c_str());

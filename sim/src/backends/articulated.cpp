@@ -21,6 +21,7 @@
 // heap inside a step: every array is sized at set-up.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -37,6 +38,7 @@
 #include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/terrain.hpp"
 #include "kestrel/sim/thread_pool.hpp"
+#include "articulated_batch.hpp"
 
 namespace kestrel::sim {
 
@@ -44,7 +46,7 @@ namespace dy = kestrel::dynamics;
 
 namespace {
 
-constexpr int kMaxContacts = 32;  // per robot per physics step
+constexpr int kMaxContacts = legged_batch::kMaxContacts;  // per robot per physics step
 using Scratch = dy::ConstraintData<kMaxRobotBodies, kMaxContacts>;
 constexpr real kEnvSpacing_m = 3;          // legged_gym's env_spacing
 constexpr real kContactMargin_m = 0.01_r;  // speculative contacts (contact.hpp)
@@ -54,10 +56,27 @@ constexpr std::size_t kMaxDelay = 4;       // physics steps of action delay the 
 using Drive = JointPdParams<kMaxJoints, kMaxDelay>;
 using DriveState = JointPdState<kMaxJoints, kMaxDelay>;
 constexpr real kBaseContactThreshold_N = 1;
-constexpr int kWarmRows = 96;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
+constexpr int kWarmRows = legged_batch::kWarmRows;  // rows of the previous step kept per robot (contact.hpp's WarmStart)
 constexpr int kMaxSelfShapes = 64;  // collision geoms of a robot with self-collisions on
 
+// One batch's per-robot inputs and outputs (physics_step_group, articulated_batch.hpp).
+struct Group {
+  static constexpr int kDofs = dy::max_dofs<kMaxRobotBodies>();
+  real tau[legged_batch::kMaxLanes][kDofs], kp[legged_batch::kMaxLanes][kDofs], kd[legged_batch::kMaxLanes][kDofs];
+  dy::ContactPoint contacts[legged_batch::kMaxLanes][kMaxContacts];
+  Vec3 force[legged_batch::kMaxLanes][kMaxContacts];
+  dy::Transform X_world[legged_batch::kMaxLanes][kMaxRobotBodies];
+  int found[legged_batch::kMaxLanes] = {};
+};
+
 struct Worker {
+  // The batched step's per-robot arrays and its scratch (set up when the batch is used).
+  std::unique_ptr<Group> group;
+  struct alignas(64) Block {
+    unsigned char b[64];
+  };
+  std::vector<Block> batch_mem;
+  void* batch_scratch() { return batch_mem.data(); }
   // The robot's model with one environment's randomised root-body inertia and joint armatures
   // written in before its physics step (only when those are randomised): one copy per worker, so
   // the environments share one model otherwise and never read each other's.
@@ -231,6 +250,16 @@ class ArticulatedSimulator final : public Simulator {
       workers_.push_back(std::make_unique<Worker>());
       workers_.back()->model = robot_.multibody;
     }
+    // The batched constrained step (articulated_batch.hpp) where the robots share one model;
+    // KESTREL_LEGGED_BATCH=off keeps every robot on the scalar step (the same bits; for A/B runs).
+    const char* batch_env = std::getenv("KESTREL_LEGGED_BATCH");
+    const bool batch_off = batch_env != nullptr && std::strcmp(batch_env, "off") == 0;
+    batch_lanes_ = !batch_off && !randomise_inertia_ && legged_batch::eligible(m) ? legged_batch::lanes() : 0;
+    if (batch_lanes_ > 1)
+      for (auto& w : workers_) {
+        w->group = std::make_unique<Group>();
+        w->batch_mem.resize((legged_batch::scratch_bytes() + 63) / 64);
+      }
     for (int e = 0; e < num_envs_; ++e) reset_env(e, false);
     for (int e = 0; e < num_envs_; ++e) refresh(e, *workers_[0]);
     return true;
@@ -356,15 +385,17 @@ class ArticulatedSimulator final : public Simulator {
     return f.h;
   }
 
-  /// The per-physics-step work of one environment (workers run slices of environments).
-  void physics_step(int e, Worker& w) {
+  /// Environment e's physics step up to the constrained step: its drive torques and gains (in),
+  /// its contacts (into `contacts`, returns how many), a due link push added to tau. The body poses
+  /// at e's q in X_world: computed here (forward_kinematics, which leaves the kinematics in w.data
+  /// too, for the scalar step's poses_current) unless poses_ready (the batch's kinematics).
+  int prepare(int e, const RobotMultibody& m, Worker& w, dy::Transform* X_world, bool poses_ready, real* tau, real* kp, real* kd,
+              dy::ContactPoint* contacts) {
     const std::size_t ei = static_cast<std::size_t>(e);
-    const RobotMultibody& m = randomise_inertia_ ? env_model(ei, w) : robot_.multibody;
-    real* q = &q_[ei * static_cast<std::size_t>(nq_)];
-    real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
+    const real* q = &q_[ei * static_cast<std::size_t>(nq_)];
+    const real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
     const real* a = &actions_[ei * static_cast<std::size_t>(action_dim_)];
-    real tau[dy::max_dofs<kMaxRobotBodies>()] = {}, kp[dy::max_dofs<kMaxRobotBodies>()] = {},
-         kd[dy::max_dofs<kMaxRobotBodies>()] = {};
+    for (int k = 0; k < m.num_dofs; ++k) tau[k] = kp[k] = kd[k] = 0;
     real qj[kMaxJoints], qdj[kMaxJoints], tj[kMaxJoints];
     const std::size_t nj = dof_v_.size();
     for (std::size_t j = 0; j < nj; ++j) {
@@ -390,18 +421,18 @@ class ArticulatedSimulator final : public Simulator {
         }
       }
     }
-    dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
+    if (!poses_ready) dy::forward_kinematics(m, w.data, q, X_world);
     int found = 0;
     for (std::size_t si = 0; si < shapes_.size(); ++si) {
       const dy::CollisionShape& s = shapes_[si];
       // The terrain's local plane under the shape's centre.
-      const dy::Transform& X = w.scratch.X_world[s.body];
+      const dy::Transform& X = X_world[s.body];
       const Vec3 c = X.r + X.E.transpose() * s.p_b;
       dy::HalfSpace ground;
       terrain_plane(c[0], c[1], ground);
       const int room = kMaxContacts - found;
       if (room <= 0) break;
-      const int k = dy::collide_halfspace(&s, 1, w.scratch.X_world, ground, kContactMargin_m, w.contacts + found, room,
+      const int k = dy::collide_halfspace(&s, 1, X_world, ground, kContactMargin_m, contacts + found, room,
                                           static_cast<int>(si));
       found += std::min(k, room);
     }
@@ -412,7 +443,7 @@ class ArticulatedSimulator final : public Simulator {
     Vec3 centre_w[kMaxSelfShapes];
     if (!self_pairs_.empty())
       for (std::size_t si = 0; si < shapes_.size(); ++si) {
-        const dy::Transform& X = w.scratch.X_world[shapes_[si].body];
+        const dy::Transform& X = X_world[shapes_[si].body];
         centre_w[si] = X.r + X.E.transpose() * shapes_[si].p_b;
       }
     for (std::size_t p = 0; p < self_pairs_.size() && found < kMaxContacts; ++p) {
@@ -424,9 +455,9 @@ class ArticulatedSimulator final : public Simulator {
         // A collision mesh (its hull) against another shape: libccd's MPR through the rigid
         // world's narrow phase (sim/collision.hpp), one contact at the deepest point, none while
         // apart (MPR measures penetration only: no speculative margin here).
-        const Contact kc = collide(sim_shape(sa, w.scratch.X_world[sa.body]), sim_shape(sb, w.scratch.X_world[sb.body]));
+        const Contact kc = collide(sim_shape(sa, X_world[sa.body]), sim_shape(sb, X_world[sb.body]));
         if (!kc.hit) continue;
-        dy::ContactPoint& c = w.contacts[found++];
+        dy::ContactPoint& c = contacts[found++];
         c.body = sa.body;
         c.body_b = sb.body;
         c.point_w = kc.point_w;
@@ -438,19 +469,37 @@ class ArticulatedSimulator final : public Simulator {
         continue;
       }
       const int room = kMaxContacts - found;
-      const int k = dy::collide_shapes(sa, w.scratch.X_world[sa.body], sb, w.scratch.X_world[sb.body], kContactMargin_m,
-                                       w.contacts + found, room, self_key0 + 16 * static_cast<int>(p));
+      const int k = dy::collide_shapes(sa, X_world[sa.body], sb, X_world[sb.body], kContactMargin_m,
+                                       contacts + found, room, self_key0 + 16 * static_cast<int>(p));
       found += std::min(k, room);
     }
     if (randomise_contacts_)
       for (int k = 0; k < found; ++k) {
-        if (dr_friction_[ei] >= 0) w.contacts[k].friction = dr_friction_[ei];
-        if (dr_restitution_[ei] >= 0) w.contacts[k].restitution = dr_restitution_[ei];
+        if (dr_friction_[ei] >= 0) contacts[k].friction = dr_friction_[ei];
+        if (dr_restitution_[ei] >= 0) contacts[k].restitution = dr_restitution_[ei];
       }
     if (link_push_due_[ei] != 0) {
-      add_link_push(ei, m, w, tau);
+      add_link_push(ei, m, X_world, tau);
       link_push_due_[ei] = 0;
     }
+    return found;
+  }
+
+  /// The per-physics-step work of one environment (workers run slices of environments).
+  void physics_step(int e, Worker& w) {
+    const std::size_t ei = static_cast<std::size_t>(e);
+    const RobotMultibody& m = randomise_inertia_ ? env_model(ei, w) : robot_.multibody;
+    real tau[dy::max_dofs<kMaxRobotBodies>()], kp[dy::max_dofs<kMaxRobotBodies>()], kd[dy::max_dofs<kMaxRobotBodies>()];
+    const int found = prepare(e, m, w, w.scratch.X_world, false, tau, kp, kd, w.contacts);
+    constrained_step(e, m, w, tau, kp, kd, found);
+  }
+
+  /// The scalar constrained step of environment e after prepare() (w's kinematics at its q), and
+  /// its per-link contact forces.
+  void constrained_step(int e, const RobotMultibody& m, Worker& w, const real* tau, const real* kp, const real* kd, int found) {
+    const std::size_t ei = static_cast<std::size_t>(e);
+    real* q = &q_[ei * static_cast<std::size_t>(nq_)];
+    real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
     const Status st = dy::step_constrained(m, w.data, w.scratch, q, qd, tau, cfg_.sim.dt_s, w.contacts, found,
                                            params_, kp, kd, &warm_[ei]);
     real* lf = &link_forces_w_[ei * static_cast<std::size_t>(m.num_bodies) * 3];
@@ -459,12 +508,63 @@ class ArticulatedSimulator final : public Simulator {
       ++step_errors_[ei];  // refused: the state is held (the core's contract)
       return;
     }
-    // Per-link contact forces; a self contact pushes its second body the other way.
+    add_link_forces(w.contacts, w.scratch.contact_force_w, found, lf);
+  }
+
+  /// Per-link contact forces (lf: 3 per body, zeroed); a self contact pushes its second body the other way.
+  static void add_link_forces(const dy::ContactPoint* contacts, const Vec3* force_w, int found, real* lf) {
     for (int k = 0; k < found; ++k) {
-      const dy::ContactPoint& ck = w.contacts[k];
-      for (int c = 0; c < 3; ++c) lf[3 * ck.body + c] += w.scratch.contact_force_w[k][c];
+      const dy::ContactPoint& ck = contacts[k];
+      for (int c = 0; c < 3; ++c) lf[3 * ck.body + c] += force_w[k][c];
       if (ck.body_b >= 0)
-        for (int c = 0; c < 3; ++c) lf[3 * ck.body_b + c] -= w.scratch.contact_force_w[k][c];
+        for (int c = 0; c < 3; ++c) lf[3 * ck.body_b + c] -= force_w[k][c];
+    }
+  }
+
+  /// The physics step of environments e0 .. e0 + count - 1 (count <= the batch's lanes) with one
+  /// batched constrained step (articulated_batch.hpp: each robot's bits are the scalar step's);
+  /// a robot the batch leaves (see there) takes the scalar step.
+  void physics_step_group(int e0, int count, Worker& w) {
+    const RobotMultibody& m = robot_.multibody;
+    Group& g = *w.group;
+    legged_batch::Lane lanes[legged_batch::kMaxLanes];
+    // The robots' kinematics in the batch's lanes (kept there for its step: poses_current), their
+    // poses for the collisions.
+    const real* qs[legged_batch::kMaxLanes] = {};
+    dy::Transform* Xs[legged_batch::kMaxLanes] = {};
+    for (int l = 0; l < count; ++l) {
+      qs[l] = &q_[static_cast<std::size_t>(e0 + l) * static_cast<std::size_t>(nq_)];
+      Xs[l] = g.X_world[l];
+    }
+    legged_batch::kinematics(m, qs, count, Xs, w.batch_scratch());
+    for (int l = 0; l < count; ++l) {
+      const std::size_t ei = static_cast<std::size_t>(e0 + l);
+      g.found[l] = prepare(e0 + l, m, w, g.X_world[l], true, g.tau[l], g.kp[l], g.kd[l], g.contacts[l]);
+      legged_batch::Lane& ln = lanes[l];
+      ln.q = &q_[ei * static_cast<std::size_t>(nq_)];
+      ln.qd = &qd_[ei * static_cast<std::size_t>(nv_)];
+      ln.tau = g.tau[l];
+      ln.kp = g.kp[l];
+      ln.kd = g.kd[l];
+      ln.contacts = g.contacts[l];
+      ln.num_contacts = g.found[l];
+      ln.warm = &warm_[ei];
+      ln.contact_force_w = g.force[l];
+    }
+    const unsigned done = legged_batch::step(m, params_, cfg_.sim.dt_s, lanes, count, w.batch_scratch());
+    for (int l = 0; l < count; ++l) {
+      const int e = e0 + l;
+      const std::size_t ei = static_cast<std::size_t>(e);
+      if ((done >> l) & 1u) {
+        real* lf = &link_forces_w_[ei * static_cast<std::size_t>(m.num_bodies) * 3];
+        for (int b = 0; b < 3 * m.num_bodies; ++b) lf[b] = 0;
+        add_link_forces(g.contacts[l], g.force[l], g.found[l], lf);
+        continue;
+      }
+      // The scalar step, with the kinematics of this robot (prepare() left the last one's).
+      dy::forward_kinematics(m, w.data, &q_[ei * static_cast<std::size_t>(nq_)], w.scratch.X_world);
+      for (int k = 0; k < g.found[l]; ++k) w.contacts[k] = g.contacts[l][k];
+      constrained_step(e, m, w, g.tau[l], g.kp[l], g.kd[l], g.found[l]);
     }
   }
 
@@ -565,6 +665,15 @@ class ArticulatedSimulator final : public Simulator {
     const int begin = static_cast<int>(static_cast<long long>(self->num_envs_) * worker / threads);
     const int end = static_cast<int>(static_cast<long long>(self->num_envs_) * (worker + 1) / threads);
     Worker& w = *self->workers_[static_cast<std::size_t>(worker)];
+    const int L = self->batch_lanes_;
+    if (L > 1) {
+      for (int e0 = begin; e0 < end; e0 += L) {
+        const int count = std::min(L, end - e0);
+        for (int s = 0; s < self->decimation_; ++s) self->physics_step_group(e0, count, w);
+        for (int e = e0; e < e0 + count; ++e) self->refresh(e, w);
+      }
+      return;
+    }
     for (int e = begin; e < end; ++e) {
       for (int s = 0; s < self->decimation_; ++s) self->physics_step(e, w);
       self->refresh(e, w);
@@ -672,12 +781,12 @@ class ArticulatedSimulator final : public Simulator {
   /// push_links' forces as joint-space forces: tau += J_b(c_b)^T f_b for every body b, J_b the
   /// Jacobian of its centre of mass c_b (its linear rows, 0-2), f_b its world-frame force. w.data
   /// and X_world hold this physics step's kinematics (physics_step computed them for collision).
-  void add_link_push(std::size_t ei, const RobotMultibody& m, Worker& w, real* tau) const {
+  void add_link_push(std::size_t ei, const RobotMultibody& m, const dy::Transform* X_world, real* tau) const {
     constexpr int kDofs = dy::max_dofs<kMaxRobotBodies>();
     real J[6 * kDofs];
     const real* f = &link_push_w_[ei * 3 * static_cast<std::size_t>(m.num_bodies)];
     for (int b = 0; b < m.num_bodies; ++b) {
-      dy::point_jacobian(m, w.scratch.X_world, b, m.body[b].com, J, kDofs);
+      dy::point_jacobian(m, X_world, b, m.body[b].com, J, kDofs);
       for (int c = 0; c < m.num_dofs; ++c)
         tau[c] += J[c] * f[3 * b] + J[kDofs + c] * f[3 * b + 1] + J[2 * kDofs + c] * f[3 * b + 2];
     }
@@ -758,6 +867,7 @@ class ArticulatedSimulator final : public Simulator {
   bool floating_ = false;
   std::vector<int> dof_v_, dof_q_;  // per actuated joint: its velocity and configuration coordinate
   std::vector<int> dof_body_;       // per actuated joint: its body
+  int batch_lanes_ = 0;  // robots per batched constrained step (0: the scalar step for every robot)
   bool randomise_inertia_ = false;  // added base mass, centre-of-mass bias or joint armature drawn
   bool randomise_contacts_ = false; // friction or restitution drawn
   std::vector<RngStream> rng_dr_, rng_link_push_, rng_terrain_;  // (envs)

@@ -262,6 +262,90 @@ inline int row_chain_view(const CD& cd, int r, std::int16_t* buffer, const std::
   return row_chain(cd, r, buffer);
 }
 
+/// The projected Gauss-Seidel sweeps of step_constrained over cd's first `rows` rows (W, b,
+/// target, lo, hi, kind, owner as the step writes them; W's columns from rows to a multiple of 4
+/// zero), from the impulses in cd.lambda, sweeps first .. p.iterations - 1; friction[c]: contact
+/// c's coefficient. Returns the sweeps used, counted from zero (iterations_used). A sweep depends on
+/// the impulses it starts from alone (u is summed afresh), so the sweeps can be resumed: the
+/// batched legged step (sim/src/backends/articulated_batch.hpp) hands a lane it has swept in
+/// SIMD lanes to this function to finish, with the bits of one uninterrupted run.
+template <class CD>
+int pgs_sweeps(CD& cd, int rows, const real* friction, const ConstraintParams& p, int first = 0) {
+  const int rows_pad = (rows + 3) / 4 * 4;
+  using Four = Eigen::Array<real, 4, 1, Eigen::DontAlign>;
+  // Projected Gauss-Seidel over residuals u = b - target + W lambda kept for all rows at once:
+  // summed afresh at the start of every sweep (column by column, u += W_c lambda_c, for every row
+  // together: no chain of dependent additions, and it vectorises; W is symmetric (step_constrained mirrors it),
+  // so column c is row c), then updated as each impulse changes within the sweep (u += W_r delta).
+  // Summing W_r . lambda serially for every row instead is a chain of additions as long as the row
+  // count, a fifth of a standing Go2's step. The fresh sum makes a sweep that starts converged
+  // change nothing, so it stops (updated incrementally only, u's rounding kept a standing ANYmal's
+  // changes at ~1e-6 m/s, the tolerance, for all 60 sweeps). Fixed orders: the same bits on every
+  // target.
+  real u[CD::kRowsPad];
+  for (int c = rows; c < rows_pad; ++c) u[c] = 0;
+  // u += W_r delta, four rows at a time, over the rows from `from` on (from the block that holds
+  // it). Within a sweep only the rows not yet visited (from r on) need it: the next sweep sums u
+  // afresh and nothing else reads it, so the rows behind are left stale (half the work, the same
+  // values where they are read). W's and u's padding past the rows holds zeros.
+  auto apply = [&](int r, real delta, int from) {
+    if (delta == 0) return;
+    const real* w = cd.W[r];
+    for (int c = from & ~3; c < rows_pad; c += 4) Eigen::Map<Four>(u + c) += Eigen::Map<const Four>(w + c) * delta;
+  };
+  auto residual = [&](int r) { return u[r]; };
+  int sweep = first;
+  for (; sweep < p.iterations && rows > 0; ++sweep) {
+    real change = 0;
+    for (int c = 0; c < rows; ++c) u[c] = cd.b[c] - cd.target[c];
+    for (int c = 0; c < rows; ++c) apply(c, cd.lambda[c], 0);
+    for (int r = 0; r < rows;) {
+      const real diag = cd.W[r][r] * (1 + p.regularization);
+      if (!(diag > 0)) {  // a row nothing can move (a contact on a welded base): no impulse
+        r += cd.kind[r] == RowKind::normal ? 3 : 1;
+        continue;
+      }
+      if (cd.kind[r] == RowKind::normal) {
+        // The normal row, then the contact's two friction rows projected onto the cone.
+        const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
+        change = std::max(change, std::fabs(ln - cd.lambda[r]) * diag);
+        apply(r, ln - cd.lambda[r], r);
+        cd.lambda[r] = ln;
+        // Gauss-Seidel within the pair: the second friction row sees the first's new impulse
+        // (through W's one entry between them; u takes both once they are projected).
+        real lt[2];
+        for (int a = 1; a <= 2; ++a) {
+          const real da = cd.W[r + a][r + a] * (1 + p.regularization);
+          const real res = a == 1 ? residual(r + 1) : residual(r + 2) + cd.W[r + 2][r + 1] * (lt[0] - cd.lambda[r + 1]);
+          lt[a - 1] = da > 0 ? cd.lambda[r + a] - res / da : real(0);
+        }
+        const real limit = friction[cd.owner[r]] * ln;
+        const real mag = std::sqrt(lt[0] * lt[0] + lt[1] * lt[1]);
+        const real scale = mag > limit ? (mag > 0 ? limit / mag : real(0)) : real(1);
+        for (int a = 1; a <= 2; ++a) {
+          const real v = lt[a - 1] * scale;
+          change = std::max(change, std::fabs(v - cd.lambda[r + a]) * cd.W[r + a][r + a]);
+          apply(r + a, v - cd.lambda[r + a], r + a);
+          cd.lambda[r + a] = v;
+        }
+        r += 3;
+        continue;
+      }
+      real l = cd.lambda[r] - residual(r) / diag;
+      l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
+      change = std::max(change, std::fabs(l - cd.lambda[r]) * diag);
+      apply(r, l - cd.lambda[r], r);
+      cd.lambda[r] = l;
+      ++r;
+    }
+    if (change <= p.tolerance_mps) {
+      ++sweep;
+      break;
+    }
+  }
+  return sweep;
+}
+
 template <int N>
 bool valid_contacts(const MultibodyModel<N>& m, const ContactPoint* c, int count) {
   for (int i = 0; i < count; ++i) {
@@ -494,27 +578,6 @@ template <int N, int C, int W = 1>
     for (int c = rows; c < rows_pad; ++c) w[c] = 0;
   }
 
-  // Projected Gauss-Seidel over residuals u = b - target + W lambda kept for all rows at once:
-  // summed afresh at the start of every sweep (column by column, u += W_c lambda_c, for every row
-  // together: no chain of dependent additions, and it vectorises; W is symmetric, mirrored above,
-  // so column c is row c), then updated as each impulse changes within the sweep (u += W_r delta).
-  // Summing W_r . lambda serially for every row instead is a chain of additions as long as the row
-  // count, a fifth of a standing Go2's step. The fresh sum makes a sweep that starts converged
-  // change nothing, so it stops (updated incrementally only, u's rounding kept a standing ANYmal's
-  // changes at ~1e-6 m/s, the tolerance, for all 60 sweeps). Fixed orders: the same bits on every
-  // target.
-  real u[CD::kRowsPad];
-  for (int c = rows; c < rows_pad; ++c) u[c] = 0;
-  // u += W_r delta, four rows at a time, over the rows from `from` on (from the block that holds
-  // it). Within a sweep only the rows not yet visited (from r on) need it: the next sweep sums u
-  // afresh and nothing else reads it, so the rows behind are left stale (half the work, the same
-  // values where they are read). W's and u's padding past the rows holds zeros.
-  auto apply = [&](int r, real delta, int from) {
-    if (delta == 0) return;
-    const real* w = cd.W[r];
-    for (int c = from & ~3; c < rows_pad; c += 4) Eigen::Map<Four>(u + c) += Eigen::Map<const Four>(w + c) * delta;
-  };
-  auto residual = [&](int r) { return u[r]; };
   if (warm != nullptr) {
     // Start from the previous step's impulses of the same rows (looked up by key; most rows keep
     // their index, which is tried first), clamped to this step's bounds.
@@ -541,55 +604,9 @@ template <int N, int C, int W = 1>
       }
     }
   }
-  int sweep = 0;
-  for (; sweep < p.iterations && rows > 0; ++sweep) {
-    real change = 0;
-    for (int c = 0; c < rows; ++c) u[c] = cd.b[c] - cd.target[c];
-    for (int c = 0; c < rows; ++c) apply(c, cd.lambda[c], 0);
-    for (int r = 0; r < rows;) {
-      const real diag = cd.W[r][r] * (1 + p.regularization);
-      if (!(diag > 0)) {  // a row nothing can move (a contact on a welded base): no impulse
-        r += cd.kind[r] == RowKind::normal ? 3 : 1;
-        continue;
-      }
-      if (cd.kind[r] == RowKind::normal) {
-        // The normal row, then the contact's two friction rows projected onto the cone.
-        const real ln = std::max(real(0), cd.lambda[r] - residual(r) / diag);
-        change = std::max(change, std::fabs(ln - cd.lambda[r]) * diag);
-        apply(r, ln - cd.lambda[r], r);
-        cd.lambda[r] = ln;
-        // Gauss-Seidel within the pair: the second friction row sees the first's new impulse
-        // (through W's one entry between them; u takes both once they are projected).
-        real lt[2];
-        for (int a = 1; a <= 2; ++a) {
-          const real da = cd.W[r + a][r + a] * (1 + p.regularization);
-          const real res = a == 1 ? residual(r + 1) : residual(r + 2) + cd.W[r + 2][r + 1] * (lt[0] - cd.lambda[r + 1]);
-          lt[a - 1] = da > 0 ? cd.lambda[r + a] - res / da : real(0);
-        }
-        const real limit = contacts[cd.owner[r]].friction * ln;
-        const real mag = std::sqrt(lt[0] * lt[0] + lt[1] * lt[1]);
-        const real scale = mag > limit ? (mag > 0 ? limit / mag : real(0)) : real(1);
-        for (int a = 1; a <= 2; ++a) {
-          const real v = lt[a - 1] * scale;
-          change = std::max(change, std::fabs(v - cd.lambda[r + a]) * cd.W[r + a][r + a]);
-          apply(r + a, v - cd.lambda[r + a], r + a);
-          cd.lambda[r + a] = v;
-        }
-        r += 3;
-        continue;
-      }
-      real l = cd.lambda[r] - residual(r) / diag;
-      l = std::min(std::max(l, cd.lo[r]), cd.hi[r]);
-      change = std::max(change, std::fabs(l - cd.lambda[r]) * diag);
-      apply(r, l - cd.lambda[r], r);
-      cd.lambda[r] = l;
-      ++r;
-    }
-    if (change <= p.tolerance_mps) {
-      ++sweep;
-      break;
-    }
-  }
+  real friction[C > 0 ? C : 1];
+  for (int c = 0; c < num_contacts; ++c) friction[c] = contacts[c].friction;
+  const int sweep = detail::pgs_sweeps(cd, rows, friction, p);
   cd.iterations_used = sweep;
   if (warm != nullptr) {
     warm->count = rows < W ? rows : W;

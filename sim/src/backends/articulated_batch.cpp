@@ -1,0 +1,126 @@
+// The batched legged step (articulated_batch.hpp): its kernel, articulated_kernel.inc, compiled
+// for baseline x86-64 (SSE2, 4 lanes), AVX2 (8) and AVX-512 (16), as engine/batch_step.cpp
+// compiles the multirotor's, and run in the copy that one chose (batch::kernel_copy()).
+#include "articulated_batch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include "kestrel/kernel/math.hpp"
+#include "kestrel/sim/batch_step.hpp"
+
+#if defined(__SSE__) && !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
+#include <immintrin.h>
+#define KESTREL_BATCH_SSE 1
+#endif
+
+namespace kestrel::sim::legged_batch {
+
+#if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
+namespace base {
+constexpr int kLanes = 4;
+#define KESTREL_BATCH_LANES 4
+#include "articulated_kernel.inc"
+#undef KESTREL_BATCH_LANES
+}  // namespace base
+
+#if defined(KESTREL_BATCH_SSE) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define KESTREL_LEGGED_WIDE 1
+// Only the kernel's own functions get the target (every header is included above); the core
+// functions it calls for the inputs' checks are the baseline ones. See engine/batch_step.cpp on
+// GCC's -Wpsabi and -Wuninitialized notes here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2 {
+constexpr int kLanes = 8;
+#define KESTREL_BATCH_LANES 8
+#include "articulated_kernel.inc"
+#undef KESTREL_BATCH_LANES
+}  // namespace avx2
+#pragma GCC pop_options
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512dq")
+namespace avx512 {
+constexpr int kLanes = 16;
+#define KESTREL_BATCH_LANES 16
+#include "articulated_kernel.inc"
+#undef KESTREL_BATCH_LANES
+}  // namespace avx512
+#pragma GCC pop_options
+#pragma GCC diagnostic pop
+#endif
+#endif
+
+int lanes() {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return 0;
+#else
+  return batch::lanes();
+#endif
+}
+
+bool eligible(const Model& m) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  (void)m;
+  return false;  // the kernel reproduces Eigen's float evaluation order only
+#else
+  if (m.num_bodies <= 0 || m.num_dofs <= 0) return false;
+  for (int i = 0; i < m.num_bodies; ++i) {
+    const bool one_dof = m.joint[i] == dynamics::JointType::revolute || m.joint[i] == dynamics::JointType::prismatic;
+    if (one_dof && m.unit_subspace[i] < 0) return false;
+    if (m.joint[i] == dynamics::JointType::free && m.parent[i] >= 0) return false;
+  }
+  return true;
+#endif
+}
+
+std::size_t scratch_bytes() {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  return 0;
+#elif defined(KESTREL_LEGGED_WIDE)
+  return std::max({sizeof(base::Scratch), sizeof(avx2::Scratch), sizeof(avx512::Scratch)});
+#else
+  return sizeof(base::Scratch);
+#endif
+}
+
+void kinematics(const Model& m, const real* const* q, int count, dynamics::Transform* const* X_world, void* scratch) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  (void)m, (void)q, (void)count, (void)X_world, (void)scratch;
+#else
+#ifdef KESTREL_LEGGED_WIDE
+  switch (batch::kernel_copy()) {
+    case batch::KernelCopy::avx512: avx512::kinematics_k(m, q, count, X_world, scratch); return;
+    case batch::KernelCopy::avx2: avx2::kinematics_k(m, q, count, X_world, scratch); return;
+    default: break;
+  }
+#endif
+  base::kinematics_k(m, q, count, X_world, scratch);
+#endif
+}
+
+unsigned step(const Model& m, const dynamics::ConstraintParams& p, real dt_s, const Lane* lanes_in, int count, void* scratch) {
+#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
+  (void)m, (void)p, (void)dt_s, (void)lanes_in, (void)count, (void)scratch;
+  return 0;
+#else
+  if (count > lanes()) return 0;
+#ifdef KESTREL_LEGGED_WIDE
+  switch (batch::kernel_copy()) {
+    case batch::KernelCopy::avx512: return avx512::step_k(m, p, dt_s, lanes_in, count, scratch);
+    case batch::KernelCopy::avx2: return avx2::step_k(m, p, dt_s, lanes_in, count, scratch);
+    default: break;
+  }
+#endif
+  return base::step_k(m, p, dt_s, lanes_in, count, scratch);
+#endif
+}
+
+}  // namespace kestrel::sim::legged_batch
