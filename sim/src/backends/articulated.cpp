@@ -568,15 +568,32 @@ class ArticulatedSimulator final : public Simulator {
     }
   }
 
-  /// The views of environment e from its state (and its feet by forward kinematics).
-  void refresh(int e, Worker& w) {
+  /// refresh() of environments e0 .. e0 + count - 1 with their poses from the batch's kinematics.
+  void refresh_group(int e0, int count, Worker& w) {
+    Group& g = *w.group;
+    const real* qs[legged_batch::kMaxLanes] = {};
+    dy::Transform* Xs[legged_batch::kMaxLanes] = {};
+    for (int l = 0; l < count; ++l) {
+      qs[l] = &q_[static_cast<std::size_t>(e0 + l) * static_cast<std::size_t>(nq_)];
+      Xs[l] = g.X_world[l];
+    }
+    legged_batch::kinematics(robot_.multibody, qs, count, Xs, w.batch_scratch());
+    for (int l = 0; l < count; ++l) refresh(e0 + l, w, g.X_world[l]);
+  }
+
+  /// The views of environment e from its state (and its feet by forward kinematics; X_world: the
+  /// body poses at its q when the caller has them).
+  void refresh(int e, Worker& w, const dy::Transform* X_world = nullptr) {
     const RobotMultibody& m = robot_.multibody;
     const std::size_t ei = static_cast<std::size_t>(e);
     const real* q = &q_[ei * static_cast<std::size_t>(nq_)];
     const real* qd = &qd_[ei * static_cast<std::size_t>(nv_)];
-    dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
+    if (X_world == nullptr) {
+      dy::forward_kinematics(m, w.data, q, w.scratch.X_world);
+      X_world = w.scratch.X_world;
+    }
     RigidBodyState s;
-    const dy::Transform& X0 = w.scratch.X_world[0];
+    const dy::Transform& X0 = X_world[0];
     s.position_w = X0.r;
     s.orientation_wb = quat_from_rotation_matrix(X0.E.transpose());
     if (floating_) {
@@ -593,7 +610,7 @@ class ArticulatedSimulator final : public Simulator {
       dof_vel_[ei * dof_v_.size() + j] = qd[dof_v_[j]];
     }
     for (std::size_t f = 0; f < robot_.foot_bodies.size(); ++f) {
-      const dy::Transform& X = w.scratch.X_world[robot_.foot_bodies[f]];
+      const dy::Transform& X = X_world[robot_.foot_bodies[f]];
       for (int c = 0; c < 3; ++c) feet_pos_w_[(ei * robot_.foot_bodies.size() + f) * 3 + c] = X.r[c];
     }
     const real* lf = &link_forces_w_[ei * static_cast<std::size_t>(m.num_bodies) * 3];
@@ -670,7 +687,7 @@ class ArticulatedSimulator final : public Simulator {
       for (int e0 = begin; e0 < end; e0 += L) {
         const int count = std::min(L, end - e0);
         for (int s = 0; s < self->decimation_; ++s) self->physics_step_group(e0, count, w);
-        for (int e = e0; e < e0 + count; ++e) self->refresh(e, w);
+        self->refresh_group(e0, count, w);
       }
       return;
     }
