@@ -1,6 +1,6 @@
 // The batched legged step (articulated_batch.hpp): its kernel, articulated_kernel.inc, compiled
 // for baseline x86-64 (SSE2, 4 lanes), AVX2 (8) and AVX-512 (16), as engine/batch_step.cpp
-// compiles the multirotor's, and run in the copy that one chose (batch::kernel_copy()).
+// compiles the multirotor's, and run in the widest copy this CPU runs or the one asked for (copy() below).
 #include "articulated_batch.hpp"
 
 #include <algorithm>
@@ -58,11 +58,22 @@ constexpr int kLanes = 16;
 #endif
 #endif
 
+#if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
+namespace {
+// The copy this step runs: the one asked for, else the widest (see batch::kernel_copy_chosen).
+batch::KernelCopy copy() { return batch::kernel_copy_chosen() ? batch::kernel_copy() : batch::widest_kernel_copy(); }
+}  // namespace
+#endif
+
 int lanes() {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
   return 0;
 #else
-  return batch::lanes();
+  switch (copy()) {
+    case batch::KernelCopy::avx512: return 16;
+    case batch::KernelCopy::avx2: return 8;
+    default: return 4;
+  }
 #endif
 }
 
@@ -96,7 +107,7 @@ void kinematics(const Model& m, const real* const* q, int count, dynamics::Trans
   (void)m, (void)q, (void)count, (void)X_world, (void)scratch;
 #else
 #ifdef KESTREL_LEGGED_WIDE
-  switch (batch::kernel_copy()) {
+  switch (copy()) {
     case batch::KernelCopy::avx512: avx512::kinematics_k(m, q, count, X_world, scratch); return;
     case batch::KernelCopy::avx2: avx2::kinematics_k(m, q, count, X_world, scratch); return;
     default: break;
@@ -113,7 +124,7 @@ unsigned step(const Model& m, const dynamics::ConstraintParams& p, real dt_s, co
 #else
   if (count > lanes()) return 0;
 #ifdef KESTREL_LEGGED_WIDE
-  switch (batch::kernel_copy()) {
+  switch (copy()) {
     case batch::KernelCopy::avx512: return avx512::step_k(m, p, dt_s, lanes_in, count, scratch);
     case batch::KernelCopy::avx2: return avx2::step_k(m, p, dt_s, lanes_in, count, scratch);
     default: break;

@@ -1,6 +1,6 @@
 // The legged robots' constrained physics step for several robots of one model at once, one robot
-// per SIMD lane (4 lanes in the baseline x86-64 copy, 8 with AVX2, 16 with AVX-512; the copy is the
-// multirotor kernel's choice, engine/batch_step.hpp's kernel_copy()). Each lane performs the IEEE
+// per SIMD lane (4 lanes in the baseline x86-64 copy, 8 with AVX2, 16 with AVX-512: the widest the
+// CPU runs, or the copy asked for, batch_step.hpp's kernel_copy_chosen()). Each lane performs the IEEE
 // operations that dynamics::step_constrained performs for that robot alone, in the same order
 // (Eigen's 3-term sums resolved to the order Eigen 3.4 evaluates them, a0 + (a1 + a2), as the
 // multirotor's kernel does), so every lane's result has the bits of the scalar step:

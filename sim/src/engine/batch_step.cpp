@@ -104,6 +104,8 @@ KernelCopy default_copy() {
 }
 const KernelCopy g_default = default_copy();
 KernelCopy g_copy = g_default;  // changed by use_kernel() only (tests, benches), before stepping
+const bool g_env_chosen = std::getenv("KESTREL_BATCH_KERNEL") != nullptr;
+bool g_chosen = g_env_chosen;
 }  // namespace
 
 // The kernel moves RigidBodyState as 13 packed floats (position, quaternion x y z w, linear
@@ -120,10 +122,18 @@ KernelCopy kernel_copy() { return g_copy; }
 bool use_kernel(KernelCopy c) {
   if (static_cast<int>(c) > static_cast<int>(widest_copy())) return false;
   g_copy = c;
+  g_chosen = true;
   return true;
 }
 
-void use_default_kernel() { g_copy = g_default; }
+void use_default_kernel() {
+  g_copy = g_default;
+  g_chosen = g_env_chosen;
+}
+
+bool kernel_copy_chosen() { return g_chosen; }
+
+KernelCopy widest_kernel_copy() { return widest_copy(); }
 
 int lanes() {
   switch (g_copy) {

@@ -604,7 +604,7 @@ template <int N, int C, int W = 1>
       }
     }
   }
-  real friction[C > 0 ? C : 1];
+  real friction[C > 0 ? C : 1] = {};  // zeros past the contacts (never read; -Wmaybe-uninitialized cannot see that)
   for (int c = 0; c < num_contacts; ++c) friction[c] = contacts[c].friction;
   const int sweep = detail::pgs_sweeps(cd, rows, friction, p);
   cd.iterations_used = sweep;
