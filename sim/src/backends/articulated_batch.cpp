@@ -20,42 +20,9 @@
 namespace kestrel::sim::legged_batch {
 
 #if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
-namespace base {
-constexpr int kLanes = 4;
-#define KESTREL_BATCH_LANES 4
-#include "articulated_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace base
-
-#if defined(KESTREL_BATCH_SSE) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define KESTREL_LEGGED_WIDE 1
-// Only the kernel's own functions get the target (every header is included above); the core
-// functions it calls for the inputs' checks are the baseline ones. See engine/batch_step.cpp on
-// GCC's -Wpsabi and -Wuninitialized notes here.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2 {
-constexpr int kLanes = 8;
-#define KESTREL_BATCH_LANES 8
-#include "articulated_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace avx2
-#pragma GCC pop_options
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512dq")
-namespace avx512 {
-constexpr int kLanes = 16;
-#define KESTREL_BATCH_LANES 16
-#include "articulated_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace avx512
-#pragma GCC pop_options
-#pragma GCC diagnostic pop
-#endif
+#define KESTREL_KERNEL_FILE "../backends/articulated_kernel.inc"
+#include "../engine/kernel_copies.inc"
+#undef KESTREL_KERNEL_FILE
 #endif
 
 #if !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
@@ -95,7 +62,7 @@ bool eligible(const Model& m) {
 std::size_t scratch_bytes() {
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
   return 0;
-#elif defined(KESTREL_LEGGED_WIDE)
+#elif defined(KESTREL_BATCH_WIDE)
   return std::max({sizeof(base::Scratch), sizeof(avx2::Scratch), sizeof(avx512::Scratch)});
 #else
   return sizeof(base::Scratch);
@@ -106,7 +73,7 @@ void kinematics(const Model& m, const real* const* q, int count, dynamics::Trans
 #if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
   (void)m, (void)q, (void)count, (void)X_world, (void)scratch;
 #else
-#ifdef KESTREL_LEGGED_WIDE
+#ifdef KESTREL_BATCH_WIDE
   switch (copy()) {
     case batch::KernelCopy::avx512: avx512::kinematics_k(m, q, count, X_world, scratch); return;
     case batch::KernelCopy::avx2: avx2::kinematics_k(m, q, count, X_world, scratch); return;
@@ -123,7 +90,7 @@ unsigned step(const Model& m, const dynamics::ConstraintParams& p, real dt_s, co
   return 0;
 #else
   if (count > lanes()) return 0;
-#ifdef KESTREL_LEGGED_WIDE
+#ifdef KESTREL_BATCH_WIDE
   switch (copy()) {
     case batch::KernelCopy::avx512: return avx512::step_k(m, p, dt_s, lanes_in, count, scratch);
     case batch::KernelCopy::avx2: return avx2::step_k(m, p, dt_s, lanes_in, count, scratch);

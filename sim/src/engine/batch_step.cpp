@@ -24,57 +24,11 @@ namespace kestrel::sim::batch {
 
 namespace al = kestrel::allocation;
 
-// Baseline copy of the kernel (SSE2: every x86-64; plain C++ element loops elsewhere), 4 lanes. In
-// the double build the lanes are 32-byte vectors passed between the kernel's own inline helpers
-// (GCC's -Wpsabi note about their calling convention does not concern them); eligible() is false
-// there, so World never uses this copy.
-#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-namespace base {
-constexpr int kLanes = 4;
-#define KESTREL_BATCH_LANES 4
-#include "batch_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace base
-#if defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE
-#pragma GCC diagnostic pop
-#endif
-
-#if defined(KESTREL_BATCH_SSE) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define KESTREL_BATCH_WIDE 1
-// The same kernel for AVX2 machines, 8 lanes in 256-bit registers, and for AVX-512 machines, 16
-// lanes in 512-bit registers. Every header is included above, so only the kernel's own functions
-// get the target; the core functions it calls (the scalar fallbacks) are the baseline ones.
-// GCC's -Wpsabi note (a 32- or 64-byte vector passed by value changes ABI with the target) does
-// not concern these functions: they call only each other, all compiled for the same target.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wpsabi"
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2 {
-constexpr int kLanes = 8;
-#define KESTREL_BATCH_LANES 8
-#include "batch_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace avx2
-#pragma GCC pop_options
-// GCC 12's _mm512_undefined_ps (a self-initialised variable, by design) trips -Wuninitialized
-// inside the extract and sqrt intrinsics: a false positive of the header, not of this code.
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512dq")
-namespace avx512 {
-constexpr int kLanes = 16;
-#define KESTREL_BATCH_LANES 16
-#include "batch_kernel.inc"
-#undef KESTREL_BATCH_LANES
-}  // namespace avx512
-#pragma GCC pop_options
-#pragma GCC diagnostic pop
-#endif
+// The kernel's three copies (4, 8, 16 lanes). In the double build eligible() is false, so World
+// never uses them.
+#define KESTREL_KERNEL_FILE "batch_kernel.inc"
+#include "kernel_copies.inc"
+#undef KESTREL_KERNEL_FILE
 
 namespace {
 // The widest copy this CPU and build run (libgcc's CPU model, which checks the OS saves the wide
