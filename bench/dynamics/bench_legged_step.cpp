@@ -4,7 +4,10 @@
 // Goal: <= 3 us per physics step per core, >= 15x MuJoCo per core").
 //
 // Per robot file (models/go2/go2.xml, models/anymal_c/anymal_c.xml):
-//  - MuJoCo (Debian's libmujoco 2.2.2 C library, double): a small wrapper MJCF written to a
+//  - MuJoCo, double, two builds side by side (mujoco_runner.hpp): Debian's libmujoco 2.2.2 C library
+//    (the one the loader links) and the PyPI wheel's (python/requirements.txt's `mujoco`, the build
+//    the issue names; its library loaded with dlopen, --mujoco-pypi, found in .venv by the build).
+//    Per build: a small wrapper MJCF written to a
 //    temporary file <include>s the robot file and adds a floor plane z = 0 (the robot files have
 //    none). One physics step = the joint PD below into d->ctrl (the files' motors, gear 1, ctrlrange
 //    = the effort limits) and mj_step. Two solver settings, each timed: the file's own (it sets none:
@@ -33,7 +36,6 @@
 // heights within 3 cm of each other, summed normal force within 10% of m g on both, no step
 // refused (the smoke ctest). bench/dynamics/run_legged.sh runs it pinned to one core and writes
 // bench/results/host/legged_step_side_by_side.csv.
-#include <mujoco/mujoco.h>
 #include <unistd.h>
 
 #include <climits>
@@ -55,12 +57,16 @@
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/progress.hpp"
 #include "backends/articulated_batch.hpp"
+#include "mujoco_runner.hpp"
 
 #ifndef KESTREL_BENCH_MODELS_DIR
 #define KESTREL_BENCH_MODELS_DIR "models"
 #endif
 #ifndef KESTREL_BENCH_CXX_FLAGS
 #define KESTREL_BENCH_CXX_FLAGS "?"
+#endif
+#ifndef KESTREL_BENCH_MUJOCO_PYPI_LIB
+#define KESTREL_BENCH_MUJOCO_PYPI_LIB ""
 #endif
 
 namespace {
@@ -98,11 +104,17 @@ struct SimFigures {
   double rep_dz = 0;        // base height change during the first timed rep (m)
 };
 
-// MuJoCo's solver settings per row: the file's own (MuJoCo's defaults: pyramidal cone, impratio
-// 1) and those of the MuJoCo Menagerie's Go2 (elliptic cone, impratio 100: "increased impratio to
-// reduce slippage"; Kestrel's cone is isotropic, as an elliptic one).
-constexpr int kMujocoConfigs = 2;
-const char* const kMujocoConfigName[kMujocoConfigs] = {"file_defaults", "elliptic_impratio100"};
+// MuJoCo's sides, each a build and solver settings: the file's own (MuJoCo's defaults: pyramidal
+// cone, impratio 1) and those of the MuJoCo Menagerie's Go2 (elliptic cone, impratio 100:
+// "increased impratio to reduce slippage"; Kestrel's cone is isotropic, as an elliptic one), for
+// Debian's libmujoco and, where its library loads, the PyPI wheel's (mujoco_runner.hpp).
+struct MujocoConfig {
+  std::string name;  // the CSV's mujoco_config
+  bool pypi;
+  bool menagerie_cone;
+};
+std::vector<MujocoConfig> g_configs;
+std::string g_pypi_lib;
 
 struct Result {
   std::string robot;
@@ -112,8 +124,8 @@ struct Result {
   double batch_ns = 1e300;  // Kestrel's batched step: best rep, ns per robot per physics step
   int batch_lanes = 0;
   bool batch_same_bits = false;  // its robots end each rep with the scalar step's state, bit for bit
-  SimFigures mj[kMujocoConfigs];
-  std::string mj_desc[kMujocoConfigs];
+  std::vector<SimFigures> mj;
+  std::vector<std::string> mj_desc, mj_version;
   bool ok = true;
   std::string problem;
 };
@@ -272,107 +284,6 @@ struct KestrelBatchSide {
   }
 };
 
-// ---------------------------------------------------------------- MuJoCo's side
-struct MujocoSide {
-  mjModel* m = nullptr;
-  mjData* d = nullptr;
-  std::vector<int> act_q, act_v;  // per actuator: the joint's qpos and qvel addresses
-  std::vector<double> q_home, lim;
-  double kp = 0, kd = 0;
-
-  ~MujocoSide() {
-    if (d != nullptr) mj_deleteData(d);
-    if (m != nullptr) mj_deleteModel(m);
-  }
-
-  bool init(const std::string& robot_path, int config, double gain_p, double gain_d, std::string& err) {
-    // The robot file with a floor: a wrapper that includes it (absolute path) and adds a plane.
-    char tmp[] = "/tmp/kestrel_bench_legged_XXXXXX.xml";
-    const int fd = mkstemps(tmp, 4);
-    if (fd < 0) {
-      err = "cannot create a temporary file for the wrapper MJCF";
-      return false;
-    }
-    close(fd);
-    // MuJoCo 2.2 resolves an include against the including file's folder (it prefixes it even to an
-    // absolute path): climb from /tmp to the root first.
-    char abs_path[PATH_MAX];
-    if (realpath(robot_path.c_str(), abs_path) == nullptr) {
-      std::remove(tmp);
-      err = robot_path + ": no such file";
-      return false;
-    }
-    {
-      std::ofstream w(tmp);
-      w << "<mujoco model=\"floor_and_robot\">\n  <include file=\".." << abs_path
-        << "\"/>\n  <worldbody>\n    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" pos=\"0 0 0\" "
-           "contype=\"1\" conaffinity=\"1\" friction=\"1 0.005 0.0001\"/>\n  </worldbody>\n</mujoco>\n";
-    }
-    char msg[1000] = "";
-    m = mj_loadXML(tmp, nullptr, msg, sizeof msg);
-    std::remove(tmp);
-    if (m == nullptr) {
-      err = robot_path + " (MuJoCo, with a floor): " + msg;
-      return false;
-    }
-    if (std::fabs(m->opt.timestep - kDt) > 1e-12) {
-      err = robot_path + ": MuJoCo's timestep is not 0.005 s";
-      return false;
-    }
-    if (config == 1) {
-      m->opt.cone = mjCONE_ELLIPTIC;
-      m->opt.impratio = 100;
-    }
-    d = mj_makeData(m);
-    const int key = mj_name2id(m, mjOBJ_KEY, "home");
-    if (key < 0) {
-      err = robot_path + ": no 'home' keyframe in MuJoCo's model";
-      return false;
-    }
-    mj_resetDataKeyframe(m, d, key);
-    for (int a = 0; a < m->nu; ++a) {
-      if (m->actuator_trntype[a] != mjTRN_JOINT) {
-        err = robot_path + ": an actuator not on a joint";
-        return false;
-      }
-      const int j = m->actuator_trnid[2 * a];
-      act_q.push_back(m->jnt_qposadr[j]);
-      act_v.push_back(m->jnt_dofadr[j]);
-      q_home.push_back(m->key_qpos[key * m->nq + m->jnt_qposadr[j]]);
-      lim.push_back(m->actuator_ctrllimited[a] ? std::min(std::fabs(m->actuator_ctrlrange[2 * a]),
-                                                          std::fabs(m->actuator_ctrlrange[2 * a + 1]))
-                                               : 1e300);
-    }
-    kp = gain_p;
-    kd = gain_d;
-    mj_forward(m, d);
-    return true;
-  }
-
-  void step() {
-    for (int a = 0; a < m->nu; ++a) {
-      const double t = kp * (q_home[static_cast<std::size_t>(a)] - d->qpos[act_q[static_cast<std::size_t>(a)]]) -
-                       kd * d->qvel[act_v[static_cast<std::size_t>(a)]];
-      const double l = lim[static_cast<std::size_t>(a)];
-      d->ctrl[a] = std::max(-l, std::min(l, t));
-    }
-    mj_step(m, d);
-  }
-
-  double normal_force() const {
-    double f = 0;
-    for (int c = 0; c < d->ncon; ++c) {
-      mjtNum r[6];
-      mj_contactForce(m, d, c, r);
-      f += r[0];
-    }
-    return f;
-  }
-  double x() const { return d->qpos[0]; }
-  double y() const { return d->qpos[1]; }
-  double z() const { return d->qpos[2]; }
-};
-
 std::string cpu_model() {
   std::ifstream f("/proc/cpuinfo");
   std::string line;
@@ -382,23 +293,6 @@ std::string cpu_model() {
       return p == std::string::npos ? line : line.substr(p + 2);
     }
   return "unknown CPU";
-}
-
-const char* integrator_name(int i) {
-  switch (i) {
-    case mjINT_EULER: return "Euler";
-    case mjINT_RK4: return "RK4";
-    default: return "implicit";
-  }
-}
-
-std::string describe(const mjModel* m) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "integrator %s, cone %s, impratio %g, solver %s, iterations %d, tolerance %g",
-                integrator_name(m->opt.integrator), m->opt.cone == mjCONE_ELLIPTIC ? "elliptic" : "pyramidal",
-                m->opt.impratio, m->opt.solver == mjSOL_NEWTON ? "Newton" : m->opt.solver == mjSOL_CG ? "CG" : "PGS",
-                m->opt.iterations, m->opt.tolerance);
-  return buf;
 }
 
 // Physics steps of every side (settling and timed reps) on one progress line (issue 15; a terminal
@@ -416,9 +310,17 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
   out.robot = c.name;
   std::string err;
   const auto ks_side = std::make_unique<KestrelSide>();  // large scratch (ConstraintData): on the heap
-  MujocoSide mjs[kMujocoConfigs];
+  const int nm = static_cast<int>(g_configs.size());
+  std::vector<std::unique_ptr<kestrel_bench::MujocoRunner>> mjs;
+  out.mj.assign(g_configs.size(), SimFigures());
+  out.mj_desc.assign(g_configs.size(), std::string());
+  out.mj_version.assign(g_configs.size(), std::string());
   bool loaded = ks_side->init(path, c.kp, c.kd, err);
-  for (int i = 0; i < kMujocoConfigs && loaded; ++i) loaded = mjs[i].init(path, i, c.kp, c.kd, err);
+  for (int i = 0; i < nm && loaded; ++i) {
+    const MujocoConfig& mc = g_configs[static_cast<std::size_t>(i)];
+    mjs.push_back(mc.pypi ? kestrel_bench::make_mujoco_pypi(g_pypi_lib, err) : kestrel_bench::make_mujoco_debian());
+    loaded = mjs.back() != nullptr && mjs.back()->init(path, mc.menagerie_cone, c.kp, c.kd, kDt, err);
+  }
   if (!loaded) {
     std::fprintf(stderr, "kestrel_bench_legged_step: %s\n", err.c_str());
     return false;
@@ -426,12 +328,13 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
   KestrelSide& k = *ks_side;
   out.mass_kg = static_cast<double>(k.robot.total_mass_kg);
   out.kestrel_shapes = static_cast<int>(k.shapes.size());
-  for (int i = 0; i < kMujocoConfigs; ++i) {
-    out.mj_desc[i] = describe(mjs[i].m);
-    if (std::fabs(mj_getTotalmass(mjs[i].m) - out.mass_kg) > 1e-3 * out.mass_kg) {
+  for (std::size_t i = 0; i < mjs.size(); ++i) {
+    out.mj_desc[i] = mjs[i]->describe();
+    out.mj_version[i] = mjs[i]->version();
+    if (std::fabs(mjs[i]->total_mass() - out.mass_kg) > 1e-3 * out.mass_kg) {
       out.ok = false;
       out.problem += " masses differ (Kestrel " + std::to_string(out.mass_kg) + ", MuJoCo " +
-                     std::to_string(mj_getTotalmass(mjs[i].m)) + ");";
+                     std::to_string(mjs[i]->total_mass()) + ");";
     }
   }
 
@@ -457,8 +360,8 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
   }
   out.k.settle_drift = std::hypot(k.x() - kx0, k.y() - ky0);
   progress_add(settle);
-  for (int i = 0; i < kMujocoConfigs; ++i) {
-    MujocoSide& mj = mjs[i];
+  for (std::size_t i = 0; i < mjs.size(); ++i) {
+    kestrel_bench::MujocoRunner& mj = *mjs[i];
     SimFigures& f = out.mj[i];
     const double x0 = mj.x(), y0 = mj.y();
     for (int s = 0; s < settle; ++s) {
@@ -466,10 +369,10 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       if (s >= settle - kAverageSteps) {
         f.height += mj.z() / kAverageSteps;
         f.fn += mj.normal_force() / kAverageSteps;
-        f.iters += static_cast<double>(mj.d->solver_iter) / kAverageSteps;
-        f.iters_max = std::max(f.iters_max, mj.d->solver_iter);
-        f.contacts += static_cast<double>(mj.d->ncon) / kAverageSteps;
-        f.rows += static_cast<double>(mj.d->nefc) / kAverageSteps;
+        f.iters += static_cast<double>(mj.solver_iterations()) / kAverageSteps;
+        f.iters_max = std::max(f.iters_max, mj.solver_iterations());
+        f.contacts += static_cast<double>(mj.contacts()) / kAverageSteps;
+        f.rows += static_cast<double>(mj.rows()) / kAverageSteps;
       }
     }
     f.settle_drift = std::hypot(mj.x() - x0, mj.y() - y0);
@@ -482,10 +385,12 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
 
   // The timed reps, from the settled state each time, the sides interleaved.
   const std::vector<real> q_settled = k.q, qd_settled = k.qd;
-  mjData* settled[kMujocoConfigs];
-  for (int i = 0; i < kMujocoConfigs; ++i) {
-    settled[i] = mj_makeData(mjs[i].m);
-    mj_copyData(settled[i], mjs[i].m, mjs[i].d);
+  std::vector<double> mj_x0, mj_y0, mj_z0;
+  for (const auto& mj : mjs) {
+    mj->save();
+    mj_x0.push_back(mj->x());
+    mj_y0.push_back(mj->y());
+    mj_z0.push_back(mj->z());
   }
   bool k_ok = true;
   const KestrelSide k_settled = k;
@@ -515,9 +420,9 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       out.k.rep_drift = std::hypot(k.x() - static_cast<double>(q_settled[0]), k.y() - static_cast<double>(q_settled[1]));
       out.k.rep_dz = k.z() - static_cast<double>(q_settled[2]);
     }
-    for (int c2 = 0; c2 < kMujocoConfigs; ++c2) {
-      MujocoSide& mj = mjs[c2];
-      mj_copyData(mj.d, mj.m, settled[c2]);
+    for (std::size_t c2 = 0; c2 < mjs.size(); ++c2) {
+      kestrel_bench::MujocoRunner& mj = *mjs[c2];
+      mj.restore();
       const auto t1 = Clock::now();
       for (long i = 0; i < steps; ++i) mj.step();
       const double mns = std::chrono::duration<double, std::nano>(Clock::now() - t1).count() / static_cast<double>(steps);
@@ -525,12 +430,11 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
       progress_add(static_cast<double>(steps));
       g_sink = g_sink + mj.z();
       if (r == 0) {
-        out.mj[c2].rep_drift = std::hypot(mj.x() - settled[c2]->qpos[0], mj.y() - settled[c2]->qpos[1]);
-        out.mj[c2].rep_dz = mj.z() - settled[c2]->qpos[2];
+        out.mj[c2].rep_drift = std::hypot(mj.x() - mj_x0[c2], mj.y() - mj_y0[c2]);
+        out.mj[c2].rep_dz = mj.z() - mj_z0[c2];
       }
     }
   }
-  for (int i = 0; i < kMujocoConfigs; ++i) mj_deleteData(settled[i]);
   if (!k_ok) {
     out.ok = false;
     out.problem += " a timed Kestrel step refused (or a batched robot left to the scalar step);";
@@ -540,8 +444,9 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     out.problem += " the batched step's robots differ from the scalar step's;";
   }
 
-  // Do both stand? Heights against MuJoCo with the Menagerie's cone (with the file's pyramidal
-  // cone at impratio 1, MuJoCo's soft friction lets the feet creep apart: reported, not checked).
+  // Do both stand? Heights against Debian's MuJoCo with the Menagerie's cone (with the file's
+  // pyramidal cone at impratio 1, MuJoCo's soft friction lets the feet creep apart: reported, not
+  // checked; the PyPI build's heights are reported beside it).
   const double mg = out.mass_kg * kG;
   if (!(std::fabs(out.k.height - out.mj[1].height) < 0.03)) {
     out.ok = false;
@@ -551,10 +456,10 @@ bool run_case(const Case& c, const std::string& models, long steps, int reps, Re
     out.ok = false;
     out.problem += " Kestrel's normal force is not within 10% of m g;";
   }
-  for (int i = 0; i < kMujocoConfigs; ++i)
+  for (std::size_t i = 0; i < out.mj.size(); ++i)
     if (!(std::fabs(out.mj[i].fn - mg) < 0.1 * mg)) {
       out.ok = false;
-      out.problem += std::string(" MuJoCo's normal force (") + kMujocoConfigName[i] + ") is not within 10% of m g;";
+      out.problem += " MuJoCo's normal force (" + g_configs[i].name + ") is not within 10% of m g;";
     }
   return true;
 }
@@ -567,6 +472,8 @@ int main(int argc, char** argv) {
   const char* csv = nullptr;
   std::string models = KESTREL_BENCH_MODELS_DIR;
   std::string machine = "host";
+  // The PyPI wheel's libmujoco.so (the one the build found in .venv), "none" to leave it out.
+  std::string mujoco_pypi = KESTREL_BENCH_MUJOCO_PYPI_LIB;
   bool quiet = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quiet")) quiet = true;
@@ -575,9 +482,11 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
     else if (!std::strcmp(argv[i], "--models") && i + 1 < argc) models = argv[++i];
     else if (!std::strcmp(argv[i], "--machine") && i + 1 < argc) machine = argv[++i];
+    else if (!std::strcmp(argv[i], "--mujoco-pypi") && i + 1 < argc) mujoco_pypi = argv[++i];
     else {
       std::fprintf(stderr,
-                   "usage: kestrel_bench_legged_step [--steps N] [--reps R] [--csv PATH] [--models DIR] [--machine LABEL] [--quiet]\n");
+                   "usage: kestrel_bench_legged_step [--steps N] [--reps R] [--csv PATH] [--models DIR] [--machine LABEL] "
+                   "[--mujoco-pypi LIB|none] [--quiet]\n");
       return 2;
     }
   }
@@ -585,11 +494,23 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "kestrel_bench_legged_step: --steps and --reps must be positive\n");
     return 2;
   }
+  g_configs = {{"file_defaults", false, false}, {"elliptic_impratio100", false, true}};
+  if (!mujoco_pypi.empty() && mujoco_pypi != "none") {
+    std::string err;
+    if (kestrel_bench::make_mujoco_pypi(mujoco_pypi, err) == nullptr) {
+      std::fprintf(stderr, "kestrel_bench_legged_step: --mujoco-pypi %s: %s\n", mujoco_pypi.c_str(), err.c_str());
+      return 1;
+    }
+    g_pypi_lib = mujoco_pypi;
+    g_configs.push_back({"pypi_file_defaults", true, false});
+    g_configs.push_back({"pypi_elliptic_impratio100", true, true});
+  }
+  const int nm = static_cast<int>(g_configs.size());
   const Case cases[] = {{"go2", "go2/go2.xml", 20, 0.5}, {"anymal_c", "anymal_c/anymal_c.xml", 80, 2}};
   std::vector<Result> results;
   const double settle_steps = std::round(kSettleS / kDt);
   kestrel::sim::ProgressLine progress(stderr, kestrel::sim::ProgressLine::enabled_for(quiet),
-                                      static_cast<double>(sizeof cases / sizeof cases[0]) * (1 + kMujocoConfigs) * (settle_steps + static_cast<double>(reps) * static_cast<double>(steps)),
+                                      static_cast<double>(sizeof cases / sizeof cases[0]) * (1 + nm) * (settle_steps + static_cast<double>(reps) * static_cast<double>(steps)),
                                       "steps");
   g_progress = &progress;
   for (const Case& c : cases) {
@@ -600,15 +521,18 @@ int main(int argc, char** argv) {
   progress.finish();
   g_progress = nullptr;
 
-  char header[1400];
+  std::string sides;
+  for (std::size_t i = 0; i < g_configs.size(); ++i)
+    sides += (i > 0 ? " / MuJoCo " : "MuJoCo ") + results[0].mj_version[i] + (g_configs[i].pypi ? " (PyPI wheel, dlopen)" : " (Debian)") +
+             " in double, " + results[0].mj_desc[i] + " (" + g_configs[i].name + ")";
+  char header[2400];
   std::snprintf(header, sizeof header,
                 "machine %s (%s, %ld logical CPUs), one thread; compiler GCC-compatible %s, flags %s; Kestrel real = %s "
                 "(the project's default build, kestrel_sim's loader), PGS defaults (ConstraintParams(), poses_current: the step reuses the collision's forward kinematics), contact margin "
-                "0.01 m; MuJoCo %s in double, %s (file_defaults) / %s (elliptic_impratio100); dt %g s, settle %g s, "
+                "0.01 m; %s; dt %g s, settle %g s, "
                 "best of %d reps x %ld steps, interleaved; sanity figures: means over the last 0.2 s of the settling",
                 machine.c_str(), cpu_model().c_str(), sysconf(_SC_NPROCESSORS_ONLN), __VERSION__, KESTREL_BENCH_CXX_FLAGS,
-                sizeof(real) == 8 ? "double" : "float", mj_versionString(), results[0].mj_desc[0].c_str(),
-                results[0].mj_desc[1].c_str(), kDt, kSettleS, reps, steps);
+                sizeof(real) == 8 ? "double" : "float", sides.c_str(), kDt, kSettleS, reps, steps);
   std::printf("legged physics step on flat ground, PD to home (Go2 kp 20 kd 0.5, ANYmal C kp 80 kd 2)\n# %s\n", header);
   FILE* f = csv != nullptr ? std::fopen(csv, "w") : nullptr;
   if (csv != nullptr && f == nullptr) {
@@ -622,37 +546,37 @@ int main(int argc, char** argv) {
                  "kestrel_pgs_sweeps_max,mujoco_solver_iter_mean,kestrel_contacts,mujoco_ncon,kestrel_rows,mujoco_nefc,"
                  "kestrel_shapes,kestrel_settle_drift_xy_m,mujoco_settle_drift_xy_m,kestrel_rep_drift_xy_m,"
                  "mujoco_rep_drift_xy_m,kestrel_rep_dz_m,mujoco_rep_dz_m,stands,kestrel_batch_lanes,"
-                 "kestrel_batch_ns_per_step,mujoco_over_kestrel_batch,kestrel_batch_same_bits\n",
+                 "kestrel_batch_ns_per_step,mujoco_over_kestrel_batch,kestrel_batch_same_bits,mujoco_version\n",
                  header);
   bool all_ok = true;
   for (const Result& r : results) {
     const SimFigures& k = r.k;
     std::printf("\n%s: %.3f kg, m g %.2f N; Kestrel %d collision shapes; first timed rep %.1f s\n", r.robot.c_str(), r.mass_kg,
                 r.mass_kg * kG, r.kestrel_shapes, static_cast<double>(steps) * kDt);
-    std::printf("  %-30s %11s %7s %8s %8s %11s %7s %7s %10s %14s %10s\n", "side", "ns/step", "MuJoCo/K", "base z", "Fn N",
+    std::printf("  %-42s %11s %7s %8s %8s %11s %7s %7s %10s %14s %10s\n", "side", "ns/step", "MuJoCo/K", "base z", "Fn N",
                 "iters mean/max", "contacts", "rows", "settle mm", "rep drift mm", "rep dz mm");
     auto line = [&](const char* name, const SimFigures& s, double ratio) {
-      std::printf("  %-30s %11.1f %7.2f %8.4f %8.2f %7.1f/%-6d %7.1f %7.1f %10.2f %14.2f %+10.2f\n", name, s.ns, ratio, s.height,
+      std::printf("  %-42s %11.1f %7.2f %8.4f %8.2f %7.1f/%-6d %7.1f %7.1f %10.2f %14.2f %+10.2f\n", name, s.ns, ratio, s.height,
                   s.fn, s.iters, s.iters_max, s.contacts, s.rows, 1e3 * s.settle_drift, 1e3 * s.rep_drift, 1e3 * s.rep_dz);
     };
     line("kestrel (float)", k, 1.0);
     if (r.batch_lanes > 0)
-      std::printf("  %-30s %11.1f  (per robot, %d robots per step; the scalar step's bits: %s)\n", "kestrel batched (float)",
+      std::printf("  %-42s %11.1f  (per robot, %d robots per step; the scalar step's bits: %s)\n", "kestrel batched (float)",
                   r.batch_ns, r.batch_lanes, r.batch_same_bits ? "yes" : "NO");
-    for (int i = 0; i < kMujocoConfigs; ++i) {
+    for (std::size_t i = 0; i < r.mj.size(); ++i) {
       const SimFigures& m = r.mj[i];
-      const std::string name = std::string("mujoco ") + kMujocoConfigName[i];
+      const std::string name = "mujoco " + r.mj_version[i] + " " + g_configs[i].name;
       line(name.c_str(), m, m.ns / k.ns);
-      if (r.batch_lanes > 0) std::printf("  %-30s %11s %7.2f\n", "  MuJoCo / Kestrel batched", "", m.ns / r.batch_ns);
+      if (r.batch_lanes > 0) std::printf("  %-42s %11s %7.2f\n", "  MuJoCo / Kestrel batched", "", m.ns / r.batch_ns);
       if (f != nullptr)
         std::fprintf(f,
                      "%s,%s,%.3f,%.3f,%.1f,%.1f,%.3f,%.5f,%.5f,%.3f,%.3f,%.2f,%d,%.2f,%.2f,%.2f,%.2f,%.2f,%d,%.3g,%.3g,%.3g,%.3g,"
-                     "%.3g,%.3g,%d,%d,%.1f,%.3f,%d\n",
-                     r.robot.c_str(), kMujocoConfigName[i], r.mass_kg, r.mass_kg * kG, k.ns, m.ns, m.ns / k.ns, k.height,
+                     "%.3g,%.3g,%d,%d,%.1f,%.3f,%d,%s\n",
+                     r.robot.c_str(), g_configs[i].name.c_str(), r.mass_kg, r.mass_kg * kG, k.ns, m.ns, m.ns / k.ns, k.height,
                      m.height, k.fn, m.fn, k.iters, k.iters_max, m.iters, k.contacts, m.contacts, k.rows, m.rows,
                      r.kestrel_shapes, k.settle_drift, m.settle_drift, k.rep_drift, m.rep_drift, k.rep_dz, m.rep_dz,
                      r.ok ? 1 : 0, r.batch_lanes, r.batch_lanes > 0 ? r.batch_ns : 0.0,
-                     r.batch_lanes > 0 ? m.ns / r.batch_ns : 0.0, r.batch_same_bits ? 1 : 0);
+                     r.batch_lanes > 0 ? m.ns / r.batch_ns : 0.0, r.batch_same_bits ? 1 : 0, r.mj_version[i].c_str());
     }
     if (!r.ok) {
       std::fprintf(stderr, "kestrel_bench_legged_step: %s does not stand on every side:%s\n", r.robot.c_str(), r.problem.c_str());

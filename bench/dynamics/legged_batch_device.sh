@@ -25,6 +25,8 @@ case "${1:-}" in
     b=${2:?usage: legged_batch_device.sh pack BUILD_DIR CARRY}
     c=${3:?usage: legged_batch_device.sh pack BUILD_DIR CARRY}
     pack_binary "$b/bench/dynamics/kestrel_bench_legged_step" "$c/bench"
+    # MuJoCo from PyPI (the bench loads it with dlopen, so ldd does not list it): the wheel's library.
+    for l in "$root"/.venv/lib/python3*/site-packages/mujoco/libmujoco.so.*; do [ -f "$l" ] && cp -L "$l" "$c/bench/lib/libmujoco_pypi.so"; done
     pack_binary "$b/sim/kestrel" "$c/kestrel"
     cp "$0" "$c/"
     cp "$root/bench/dynamics/go2_joint_targets.yaml" "$c/go2.yaml"
@@ -39,6 +41,7 @@ case "${1:-}" in
     for copy in avx2 avx512; do
       KESTREL_BATCH_KERNEL=$copy taskset -c 2 "$B/lib/ld-linux-x86-64.so.2" --library-path "$B/lib" "$B/kestrel_bench_legged_step" \
         --steps 5000 --reps 5 --quiet --models "$B/models" --machine "device machine, $copy copy" \
+        --mujoco-pypi "$([ -f "$B/lib/libmujoco_pypi.so" ] && echo "$B/lib/libmujoco_pypi.so" || echo none)" \
         --csv "$out/legged_step_$copy.csv" > "$out/legged_step_$copy.txt" 2>&1
     done
     echo "envs,threads,copy,step,wall_s,env_steps_per_s,state_hash" > "$out/go2_joint_targets.csv"

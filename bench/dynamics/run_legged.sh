@@ -1,7 +1,8 @@
 #!/bin/sh
 # A legged robot's full physics step on flat ground side by side with MuJoCo (bench_legged_step.cpp):
-# builds kestrel_bench_legged_step in build/host (the project's default float build; MuJoCo is
-# Debian's libmujoco 2.2.2, in double) and runs it pinned to one core.
+# builds kestrel_bench_legged_step in build/host (the project's default float build; MuJoCo in
+# double, Debian's libmujoco 2.2.2 and the PyPI wheel's from .venv, python/requirements.txt's pin)
+# and runs it pinned to one core.
 #
 #   bench/dynamics/run_legged.sh [CSV] [CORE] [MACHINE]
 #     (default bench/results/host/legged_step_side_by_side.csv, core 0, machine label "host (the project's shared 2-core dev machine)")
