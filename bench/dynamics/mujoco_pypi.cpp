@@ -45,14 +45,14 @@ std::unique_ptr<MujocoRunner> make_mujoco_pypi(const std::string& lib_path, std:
     handle = dlopen(lib_path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
     if (handle == nullptr) {
       const char* e = dlerror();
-      err = lib_path + ": " + (e != nullptr ? e : "dlopen failed");
+      err = e != nullptr ? e : "dlopen failed";  // dlerror names the file
       return nullptr;
     }
     bool all = true;
     auto get = [&](auto& fn, const char* name) {
       fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(handle, name));
       if (fn == nullptr) {
-        err = lib_path + ": no symbol " + name;
+        err = std::string("no symbol ") + name;
         all = false;
       }
     };
@@ -76,8 +76,8 @@ std::unique_ptr<MujocoRunner> make_mujoco_pypi(const std::string& lib_path, std:
     }
     // The header this file was compiled against must be the library's (mjModel / mjData layouts).
     if (g_api.mj_version() != mjVERSION_HEADER) {
-      err = lib_path + ": MuJoCo " + g_api.mj_versionString() + ", compiled against the headers of " +
-            std::to_string(mjVERSION_HEADER);
+      err = std::string("MuJoCo ") + g_api.mj_versionString() + ", but the bench was compiled against the headers of " +
+            std::to_string(mjVERSION_HEADER) + " (mjVERSION_HEADER)";
       dlclose(handle);
       handle = nullptr;
       return nullptr;

@@ -34,7 +34,7 @@ class MujocoRunner {
 
 // Debian's libmujoco, linked.
 std::unique_ptr<MujocoRunner> make_mujoco_debian();
-// The PyPI wheel's library at lib_path; nullptr (err: why) when it cannot be loaded.
+// The PyPI wheel's library at lib_path; nullptr (err: why, without the path) when it cannot be loaded.
 std::unique_ptr<MujocoRunner> make_mujoco_pypi(const std::string& lib_path, std::string& err);
 
 }  // namespace kestrel_bench
