@@ -11,9 +11,12 @@
 // Robots whose contacts or active joint limits differ still share a step: the rows are the union
 // over the lanes (contacts matched by key), and a row a lane does not have is a row of zeros
 // there, which the solver skips as the scalar step skips a row nothing can move, and which adds
-// only exact zeros to every other row's sums. What falls back to the scalar step (the caller's
-// job: the returned mask leaves those lanes untouched): two-body contacts (self-collision),
-// contacts without a key or out of key order, a union of more contacts than the capacity, joints
+// only exact zeros to every other row's sums. Two-body contacts (self-collision; a contact on
+// body and body_b, acting on their relative velocity) are batched too: their rows span both
+// bodies' chains and are solved alone along the merged chain, as the scalar step solves them; a
+// key must name the same two bodies in every lane that has it. What falls back to the scalar step
+// (the caller's job: the returned mask leaves those lanes untouched): a key on other bodies in
+// another lane, contacts without a key or out of key order, a union of more contacts than the capacity, joints
 // whose motion subspace is not a unit vector (an axis other than +x, +y, +z), the double build,
 // and any lane the scalar step would refuse (it is run alone, to give its status).
 //

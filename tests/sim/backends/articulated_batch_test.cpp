@@ -46,7 +46,7 @@ real uniform(RngStream& r, real lo, real hi) { return r.uniform(lo, hi); }
 
 // A random state near the robot's home pose, with contacts of its own (a subset of the feet and
 // some leg bodies, keys ascending as the simulator writes them).
-void random_robot(const ArticulatedRobot& ar, RngStream& rng, Robot& rb, bool near_limits) {
+void random_robot(const ArticulatedRobot& ar, RngStream& rng, Robot& rb, bool near_limits, bool two_body) {
   const Model& m = ar.multibody;
   for (int k = 0; k < m.num_q; ++k) rb.q[k] = ar.home_q[static_cast<std::size_t>(k)];
   rb.q[2] += uniform(rng, -0.05_r, 0.05_r);
@@ -91,16 +91,36 @@ void random_robot(const ArticulatedRobot& ar, RngStream& rng, Robot& rb, bool ne
       ct.restitution = rng.uniform() < 0.5 ? 0_r : uniform(rng, 0, 0.5_r);
     }
   }
+  // Two-body contacts (self-collision, as the simulator keys them: after the terrain's), each key
+  // on the same pair of bodies in every lane: a leg body against another leg's or the trunk. Three
+  // pairs, so that the lanes' union (up to 26 terrain keys) stays within the batch's capacity.
+  if (two_body)
+    for (int b = 1; b < m.num_bodies; b += 4) {
+      if (rng.uniform() > 0.5 || rb.num_contacts >= lb::kMaxContacts) continue;
+      const int other = (b * 5) % m.num_bodies != b ? (b * 5) % m.num_bodies : 0;
+      dy::ContactPoint& ct = rb.contacts[rb.num_contacts++];
+      ct.body = b;
+      ct.body_b = other;
+      ct.key = 1000 + 16 * b;
+      ct.point_w = real(0.5) * (X[b].r + X[other].r) + Vec3(uniform(rng, -0.02_r, 0.02_r), uniform(rng, -0.02_r, 0.02_r), 0);
+      Vec3 nrm(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1));
+      ct.normal_w = nrm / nrm.norm();
+      ct.separation_m = uniform(rng, -0.008_r, 0.005_r);
+      ct.friction = uniform(rng, 0.2_r, 1.0_r);
+      ct.restitution = 0;
+    }
 }
 
 // Bits of a value (a NaN compares by its bits too).
 bool same_bits(real a, real b) { return std::memcmp(&a, &b, sizeof(real)) == 0; }
 
-int g_mismatch_reports = 0;
+// Every mismatch counts (the test checks the count at its end); the first 20 of a test are
+// reported one by one.
+int g_mismatches = 0;
 void expect_same(const real* a, const real* b, int n, const char* what, int lane) {
   for (int k = 0; k < n; ++k)
     if (!same_bits(a[k], b[k])) {
-      if (g_mismatch_reports++ < 20)
+      if (g_mismatches++ < 20)
         ADD_FAILURE() << what << "[" << k << "] lane " << lane << ": scalar " << a[k] << " batch " << b[k];
       return;
     }
@@ -109,7 +129,8 @@ void expect_same(const real* a, const real* b, int n, const char* what, int lane
 // Steps `count` random robots once with the scalar step and once with the batch (starting from
 // the same warm start, itself from one earlier scalar step), and compares everything written.
 // Returns the lanes the batch took.
-unsigned compare_batch(const ArticulatedRobot& ar, std::uint64_t seed, int count, bool near_limits, int bad_lane = -1) {
+unsigned compare_batch(const ArticulatedRobot& ar, std::uint64_t seed, int count, bool near_limits, int bad_lane = -1,
+                       bool two_body = false) {
   const Model& m = ar.multibody;
   dy::ConstraintParams p;
   p.iterations = 30;
@@ -120,7 +141,7 @@ unsigned compare_batch(const ArticulatedRobot& ar, std::uint64_t seed, int count
   for (int l = 0; l < count; ++l) {
     RngStream rng(seed, static_cast<std::uint32_t>(l), kPurposeUser);
     Robot& r = a[static_cast<std::size_t>(l)];
-    random_robot(ar, rng, r, near_limits);
+    random_robot(ar, rng, r, near_limits, two_body);
     // One scalar step first, for a warm start to begin from (then a fresh state around it).
     Robot warm_src = r;
     (void)dy::step_constrained(m, d, *cd, warm_src.q, warm_src.qd, warm_src.tau, dt, warm_src.contacts, warm_src.num_contacts, p,
@@ -177,6 +198,7 @@ TEST_P(ArticulatedBatch, EveryLaneHasTheScalarStepsBits) {
   std::string err;
   ASSERT_TRUE(load_robot_model(models_dir() + "/" + GetParam(), ar, err)) << err;
   ASSERT_TRUE(lb::eligible(ar.multibody));
+  g_mismatches = 0;
   for (batch::KernelCopy c : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512}) {
     if (!batch::use_kernel(c)) continue;
     const int L = lb::lanes();
@@ -187,11 +209,17 @@ TEST_P(ArticulatedBatch, EveryLaneHasTheScalarStepsBits) {
       stepped += __builtin_popcount(done);
     }
     EXPECT_GT(stepped, 24 * L * 3 / 4) << "most random lanes are stepped by the batch";
+    // With two-body (self-collision) contacts among them.
+    int stepped_two = 0;
+    for (std::uint64_t seed = 1; seed <= 12; ++seed)
+      stepped_two += __builtin_popcount(compare_batch(ar, 5000 + 1000 * seed + static_cast<std::uint64_t>(L), L, seed % 2 == 0, -1, true));
+    EXPECT_GT(stepped_two, 12 * L * 3 / 4) << "lanes with two-body contacts are stepped by the batch too";
     // Fewer robots than lanes, and a lane the scalar step refuses (a NaN torque): left untouched.
     const unsigned part = compare_batch(ar, 77, L - 1, true, 1);
     EXPECT_EQ(part & 2u, 0u);
   }
   batch::use_default_kernel();
+  EXPECT_EQ(g_mismatches, 0) << "values whose bits differ from the scalar step's (the first 20 are reported above)";
 }
 
 INSTANTIATE_TEST_SUITE_P(Robots, ArticulatedBatch, ::testing::Values("go2/go2.xml", "anymal_c/anymal_c.xml"));

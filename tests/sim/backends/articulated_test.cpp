@@ -136,8 +136,9 @@ namespace {
 // Random joint targets far beyond the joint ranges (actions of +-50: the PD saturates at the
 // effort limits), redrawn every env-step, on rough ground: the hash of 60 env-steps.
 std::uint64_t random_run(int threads, int envs, std::vector<real>* torques_seen = nullptr, Simulator** keep = nullptr,
-                         std::unique_ptr<Simulator>* owner = nullptr) {
+                         std::unique_ptr<Simulator>* owner = nullptr, bool self_collisions = false) {
   WorldConfig c = legged("go2", envs, threads);
+  c.robot.self_collisions = self_collisions;
   c.env.terrain.type = TerrainType::heightfield;
   c.env.terrain.procedural = "random_uniform";
   c.env.terrain.min_height_m = -0.03_r;
@@ -213,12 +214,12 @@ TEST(Articulated, TheBatchedStepGivesEveryRobotTheScalarStepsBits) {
     std::uint64_t hash = 0;
     std::vector<real> dof_pos, dof_vel, forces, torques;
   };
-  auto run = [](int threads, bool batched) {
+  auto run = [](int threads, bool batched, bool self = false) {
     if (!batched) setenv("KESTREL_LEGGED_BATCH", "off", 1);
     Views v;
     Simulator* sim = nullptr;
     std::unique_ptr<Simulator> owner;
-    v.hash = random_run(threads, 21, nullptr, &sim, &owner);
+    v.hash = random_run(threads, 21, nullptr, &sim, &owner, self);
     unsetenv("KESTREL_LEGGED_BATCH");
     if (sim == nullptr) return v;
     const int n = sim->num_robots(), nd = sim->num_dofs();
@@ -233,6 +234,12 @@ TEST(Articulated, TheBatchedStepGivesEveryRobotTheScalarStepsBits) {
   for (int threads : {1, 2}) {
     const Views b = run(threads, true);
     EXPECT_EQ(b.hash, scalar.hash) << threads << " threads";
+    // With robot.self_collisions the batch takes the two-body contacts too: the same bits.
+    const Views sb = run(threads, true, true), ss = run(1, false, true);
+    EXPECT_EQ(sb.hash, ss.hash) << threads << " threads, self-collisions";
+    EXPECT_NE(ss.hash, scalar.hash) << "the legs touched each other (else self-collisions change nothing)";
+    EXPECT_EQ(std::memcmp(sb.dof_vel.data(), ss.dof_vel.data(), ss.dof_vel.size() * sizeof(real)), 0);
+    EXPECT_EQ(std::memcmp(sb.forces.data(), ss.forces.data(), ss.forces.size() * sizeof(real)), 0);
     EXPECT_EQ(std::memcmp(b.dof_pos.data(), scalar.dof_pos.data(), scalar.dof_pos.size() * sizeof(real)), 0);
     EXPECT_EQ(std::memcmp(b.dof_vel.data(), scalar.dof_vel.data(), scalar.dof_vel.size() * sizeof(real)), 0);
     ASSERT_EQ(b.forces.size(), scalar.forces.size());
