@@ -12,20 +12,16 @@
 #include "mujoco_runner.hpp"
 
 namespace {
+// The functions mujoco_side.inc calls (and the version check's), named once: the pointers' types
+// below and the dlsym lookups in make_mujoco_pypi.
+#define KESTREL_MJ_FUNCTIONS(X)                                                                      \
+  X(mj_loadXML) X(mj_deleteModel) X(mj_makeData) X(mj_deleteData) X(mj_copyData) X(mj_name2id)       \
+  X(mj_resetDataKeyframe) X(mj_forward) X(mj_step) X(mj_contactForce) X(mj_getTotalmass)             \
+  X(mj_versionString) X(mj_version)
 struct Api {
-  decltype(&::mj_loadXML) mj_loadXML = nullptr;
-  decltype(&::mj_deleteModel) mj_deleteModel = nullptr;
-  decltype(&::mj_makeData) mj_makeData = nullptr;
-  decltype(&::mj_deleteData) mj_deleteData = nullptr;
-  decltype(&::mj_copyData) mj_copyData = nullptr;
-  decltype(&::mj_name2id) mj_name2id = nullptr;
-  decltype(&::mj_resetDataKeyframe) mj_resetDataKeyframe = nullptr;
-  decltype(&::mj_forward) mj_forward = nullptr;
-  decltype(&::mj_step) mj_step = nullptr;
-  decltype(&::mj_contactForce) mj_contactForce = nullptr;
-  decltype(&::mj_getTotalmass) mj_getTotalmass = nullptr;
-  decltype(&::mj_versionString) mj_versionString = nullptr;
-  decltype(&::mj_version) mj_version = nullptr;
+#define KESTREL_MJ_POINTER(f) decltype(&::f) f = nullptr;
+  KESTREL_MJ_FUNCTIONS(KESTREL_MJ_POINTER)
+#undef KESTREL_MJ_POINTER
 };
 Api g_api;
 }  // namespace
@@ -56,19 +52,9 @@ std::unique_ptr<MujocoRunner> make_mujoco_pypi(const std::string& lib_path, std:
         all = false;
       }
     };
-    get(g_api.mj_loadXML, "mj_loadXML");
-    get(g_api.mj_deleteModel, "mj_deleteModel");
-    get(g_api.mj_makeData, "mj_makeData");
-    get(g_api.mj_deleteData, "mj_deleteData");
-    get(g_api.mj_copyData, "mj_copyData");
-    get(g_api.mj_name2id, "mj_name2id");
-    get(g_api.mj_resetDataKeyframe, "mj_resetDataKeyframe");
-    get(g_api.mj_forward, "mj_forward");
-    get(g_api.mj_step, "mj_step");
-    get(g_api.mj_contactForce, "mj_contactForce");
-    get(g_api.mj_getTotalmass, "mj_getTotalmass");
-    get(g_api.mj_versionString, "mj_versionString");
-    get(g_api.mj_version, "mj_version");
+#define KESTREL_MJ_LOOKUP(f) get(g_api.f, #f);
+    KESTREL_MJ_FUNCTIONS(KESTREL_MJ_LOOKUP)
+#undef KESTREL_MJ_LOOKUP
     if (!all) {
       dlclose(handle);
       handle = nullptr;
