@@ -105,8 +105,10 @@ WorldConfig make_config(const char* env, int envs, int threads) {
 }
 
 /// Median env-steps/s of World::step over `reps` repetitions. batched = false forces the scalar
-/// robot step (World::set_batched; same bits, for the before/after comparison).
-double time_world(const Options& o, const char* env, int envs, int threads, bool batched = true) {
+/// robot step (World::set_batched; same bits, for the before/after comparison); fused = false the
+/// batched step env-step by env-step (World::set_fused; same bits).
+double time_world(const Options& o, const char* env, int envs, int threads, bool batched = true, bool fused = true,
+                  bool one_per_call = false) {
   std::string err;
   std::unique_ptr<World> w = World::create(make_config(env, envs, threads), err);
   if (!w) {
@@ -114,6 +116,7 @@ double time_world(const Options& o, const char* env, int envs, int threads, bool
     std::exit(1);
   }
   w->set_batched(batched);
+  if (!fused) w->set_fused(false);
   const int k = std::max(1, static_cast<int>(o.env_steps_per_rep / envs));
   const int warm = std::max(1, k / 4);
   // This case's progress (issue 15): one case is up to tens of seconds of silence (1 env: 21M
@@ -124,7 +127,11 @@ double time_world(const Options& o, const char* env, int envs, int threads, bool
   for (int r = 0; r < o.reps; ++r) {
     progress.update((warm + static_cast<double>(r) * k) * envs);
     const auto t0 = Clock::now();
-    w->step(k);
+    if (one_per_call) {
+      for (int j = 0; j < k; ++j) w->step(1);  // a learner's pattern: one env-step per call
+    } else {
+      w->step(k);
+    }
     rates.push_back(static_cast<double>(k) * envs / seconds_since(t0));
   }
   progress.clear();
@@ -480,6 +487,23 @@ int main(int argc, char** argv) {
     record("empty_scalar_path", big, 2, s2, "World::set_batched(false)");
     std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- scalar robot step (set_batched(false)), for comparison\n", big, s1,
                 s2, 1e9 / s1, 1e9 / s2);
+    // The batched step env-step by env-step (World::set_fused(false)): what every env-step cost
+    // before the fused env-steps, and what a world that cannot fuse (obstacles, IMU) still pays.
+    const double f1 = time_world(o, "empty", big, 1, true, false), f2 = time_world(o, "empty", big, 2, true, false);
+    record("empty_step_by_step", big, 1, f1, "World::set_fused(false)");
+    record("empty_step_by_step", big, 2, f2, "World::set_fused(false)");
+    std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- batched, env-step by env-step (set_fused(false))\n", big, f1, f2,
+                1e9 / f1, 1e9 / f2);
+    // One env-step per World::step call (what a learner's loop does): fused and not.
+    const double c1 = time_world(o, "empty", big, 1, true, true, true), c2 = time_world(o, "empty", big, 2, true, true, true);
+    const double d1 = time_world(o, "empty", big, 1, true, false, true), d2 = time_world(o, "empty", big, 2, true, false, true);
+    record("empty_one_step_per_call", big, 1, c1, "World::step(1) calls, fused");
+    record("empty_one_step_per_call", big, 2, c2, "World::step(1) calls, fused");
+    record("empty_one_step_per_call_step_by_step", big, 1, d1, "World::step(1) calls, set_fused(false)");
+    record("empty_one_step_per_call_step_by_step", big, 2, d2, "World::step(1) calls, set_fused(false)");
+    std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- one env-step per step() call, fused\n", big, c1, c2, 1e9 / c1, 1e9 / c2);
+    std::printf("  %8d %14.4g %14.4g %12.1f %12.1f   <- one env-step per step() call, set_fused(false)\n", big, d1, d2, 1e9 / d1,
+                1e9 / d2);
   }
   {
     // The kernel copies side by side (issue 18): the same worlds with the 4-lane (SSE2), 8-lane
@@ -489,7 +513,11 @@ int main(int argc, char** argv) {
     for (batch::KernelCopy c : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512}) {
       if (!batch::use_kernel(c)) continue;
       const double k1 = time_world(o, "empty", big, 1), k2 = time_world(o, "empty", big, 2);
+      const double u1 = time_world(o, "empty", big, 1, true, false), u2 = time_world(o, "empty", big, 2, true, false);
       const int nl = batch::lanes();
+      record(std::string("empty_step_by_step_lanes_") + std::to_string(nl), big, 1, u1, batch::kernel_name());
+      record(std::string("empty_step_by_step_lanes_") + std::to_string(nl), big, 2, u2, batch::kernel_name());
+      std::printf("    %-24s %12.4g %12.4g  (env-step by env-step)\n", batch::kernel_name(), u1, u2);
       if (c == batch::KernelCopy::baseline) base1 = k1, base2 = k2;
       const std::string name = std::string("empty_lanes_") + std::to_string(nl);
       record(name, big, 1, k1, batch::kernel_name());

@@ -5,6 +5,9 @@
 # kestrel_bench_sim's per-copy rows on one pinned core. Binaries from bench/sim/lanes_carry.sh.
 #
 #   bench/sim/lanes_device.sh CARRY OUT_DIR [REPS] [THREADS]      (REPS 3, THREADS "1 2 4 8 16")
+#   COPIES (default "baseline avx2 avx512"), STEPS_4096 / STEPS_65536 (default 6000 / 400: the
+#   steps of the hashes recorded since 2026-11-27; ten times that for a scaling study, where the
+#   16-thread runs of the defaults last only 0.06 s), BENCH=0 skips kestrel_bench_sim.
 #
 # Writes OUT_DIR/machine.txt (date, lscpu), runs.csv (copy, rep, envs, threads, steps, wall_s,
 # env_steps_per_s, state_hash: one value per size for every copy and thread count, or the
@@ -38,12 +41,12 @@ for r in $(seq 1 "$reps"); do
     for k in $copies; do
       # The same steps for every thread count, so each size has one state hash (~25 M env-steps:
       # ~5 s on one Xeon thread, ~0.5 s on 16).
-      run "$k" "$r" 4096 "$t" 6000
-      run "$k" "$r" 65536 "$t" 400
+      run "$k" "$r" 4096 "$t" "${STEPS_4096:-6000}"
+      run "$k" "$r" 65536 "$t" "${STEPS_65536:-400}"
     done
   done
 done
-taskset -c 2 $ld "$c/kestrel_bench_sim" --quick --reps 5 --csv "$out/bench.csv" > "$out/bench.txt" 2>&1
+[ "${BENCH:-1}" = 1 ] && taskset -c 2 $ld "$c/kestrel_bench_sim" --quick --reps 5 --csv "$out/bench.csv" > "$out/bench.txt" 2>&1
 grep -E 'Model name|^nproc|UTC' "$out/machine.txt"
 column -s, -t < "$out/runs.csv" 2>/dev/null || cat "$out/runs.csv"
-grep -A6 'kernel copies' "$out/bench.txt"
+[ "${BENCH:-1}" = 1 ] && grep -A9 'kernel copies' "$out/bench.txt"

@@ -94,8 +94,12 @@ Status step_rigid_body(const RigidBodyModel& model, RigidBodyState& s, const Wre
     if (angle > 0) {
       const Vec3 axis = n.angvel_b.normalized();
       const real h = angle * 0.5_r;
-      const real sh = std::sin(h);
-      dq = quat_from_xyzw(axis[0] * sh, axis[1] * sh, axis[2] * sh, std::cos(h));
+      // The core's sin_cos (kernel/math.hpp: Cephes' polynomial in float, no libm), not std::sin /
+      // std::cos: the same bits on the host and every MCU, and the batched step computes it in
+      // its lanes instead of calling libm once per robot.
+      real sh = 0, ch = 1;
+      sin_cos(h, sh, ch);
+      dq = quat_from_xyzw(axis[0] * sh, axis[1] * sh, axis[2] * sh, ch);
     }
     n.orientation_wb = normalized_or_identity(to_xyzw(quat_mul(s.orientation_wb, dq)));
   } else {

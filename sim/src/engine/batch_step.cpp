@@ -14,6 +14,7 @@
 #include <cstring>
 
 #include "kestrel/kernel/math.hpp"
+#include "kestrel/sim/episode.hpp"
 
 #if defined(__SSE__) && !(defined(KESTREL_USE_DOUBLE) && KESTREL_USE_DOUBLE)
 #include <immintrin.h>
@@ -41,13 +42,15 @@ KernelCopy widest_copy() {
 #endif
   return KernelCopy::baseline;
 }
-// The start-up choice: the AVX2 copy where the CPU runs it (measured no slower than the AVX-512
-// copy on both the 2-core AMD EPYC and the 16-core Xeon: the lanes' gathers and per-lane stores,
-// not the arithmetic, bound both; bench/results/device/lanes_*), else the baseline; or the copy
-// KESTREL_BATCH_KERNEL asks for, where the CPU runs it.
+// The start-up choice: the widest copy the CPU runs, or the copy KESTREL_BATCH_KERNEL asks for,
+// where the CPU runs it. (Until the fused env-steps it was the AVX2 copy: the lanes' gathers and
+// per-lane stores, not the arithmetic, bound the step, and 16 lanes were no faster. With the
+// robots in registers through a call's env-steps, the AVX-512 copy takes 1.6-1.8x the AVX2 one's
+// env-steps per second on the 2-core Zen 5 and on the 16-core Xeon, and 1.25x env-step by
+// env-step: bench/results/device/fused_*.)
 KernelCopy default_copy() {
   const KernelCopy widest = widest_copy();
-  const KernelCopy preferred = widest == KernelCopy::avx512 ? KernelCopy::avx2 : widest;
+  const KernelCopy preferred = widest;
   const char* e = std::getenv("KESTREL_BATCH_KERNEL");
   if (e == nullptr) return preferred;
   KernelCopy want = preferred;
@@ -158,6 +161,11 @@ void motor_stage(const Models& m, const Lane* lanes, const real (&thrust)[4][kMa
 }
 void rigid_body_stage(const Models& m, const Lane* lanes, const real (&body_wrench)[6][kMaxLanes]) {
   KESTREL_BATCH_DISPATCH(rigid_body_stage_k(m, lanes, body_wrench));
+}
+int robot_env_steps(const Models& m, const Lane* lanes, const QuietEnv* envs, int physics_steps, int max_env_steps) {
+  int done = 0;
+  KESTREL_BATCH_DISPATCH(env_steps_k(m, lanes, envs, physics_steps, max_env_steps, done));
+  return done;
 }
 unsigned robot_step(const Models& m, const Lane* lanes) {
   unsigned done = 0;

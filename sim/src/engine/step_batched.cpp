@@ -166,4 +166,81 @@ int env_steps_batched(const WorldModel& m, WorldData& d, int begin, int end) {
   return env;
 }
 
+bool fused_eligible(const WorldModel& m) { return batch_eligible(m) && quiet_eligible(m) && ground_tail_eligible(m); }
+
+namespace {
+// One group's fused run: at most max_env_steps env-steps of environments env .. env + lanes() - 1,
+// the ones batch::robot_env_steps completes. Only where every environment's env-steps have the
+// quiet shape: not traced, the same physics steps per env-step, the new action at physics step 0
+// (no latency: the applied action is then the action throughout, copied here once as every
+// env-step's first physics step would copy it), no obstacles, and an episode that does not reach
+// its time limit within the run (the run stops one env-step before the first lane's limit).
+int fused_group(const WorldModel& m, WorldData& d, const batch::Models& models, int env, int max_env_steps) {
+  const int group = batch::lanes();
+  const int n = d.phys_steps[env];
+  int max_steps = max_env_steps;
+  for (int l = 0; l < group; ++l) {
+    const int e = env + l;
+    if (e < d.trace_envs || d.phys_steps[e] != n || d.latency[e] != 0 || d.num_obstacles[e] != 0) return 0;
+    max_steps = std::min(max_steps, m.cfg.task.episode_len_env_steps - 1 - d.episode_step[static_cast<std::size_t>(e)]);
+  }
+  if (max_steps <= 0) return 0;
+  batch::Lane lanes[batch::kMaxLanes];
+  batch::QuietEnv envs[batch::kMaxLanes];
+  for (int l = 0; l < group; ++l) {
+    const int e = env + l;
+    const std::size_t i = m.index(e, 0);
+    real* applied = &d.applied_actions[i * kMaxActionDim];
+    std::memcpy(applied, &d.actions[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
+    lanes[l].state = &d.state[i];
+    lanes[l].ctrl = &d.mr_state[i].ctrl;
+    lanes[l].alloc = &d.mr_state[i].allocator;
+    lanes[l].motors = &d.mr_state[i].motors;
+    lanes[l].action = applied;
+    lanes[l].contact_force_w = &d.contact_force_w[i];
+    lanes[l].contact_torque_b = &d.contact_torque_b[i];
+    lanes[l].ground_z = m.cfg.env.create_ground_plane ? ground_plane_z(d, e) : -std::numeric_limits<real>::infinity();
+    envs[l].setpoint_w = &d.setpoint_w[i];
+    envs[l].lower_w = &d.lower_w[e];
+    envs[l].upper_w = &d.upper_w[e];
+    envs[l].tracking_error_sum_m = &d.stats[e].tracking_error_sum_m;
+  }
+  const int done = batch::robot_env_steps(models, lanes, envs, n, max_steps);
+  if (done == 0) return 0;
+  for (int l = 0; l < group; ++l) {
+    const int e = env + l;
+    // What begin_quiet / end_quiet leave after `done` quiet env-steps.
+    d.crashed[m.index(e, 0)] = 0;
+    d.episode_ended[static_cast<std::size_t>(e)] = 0;
+    d.stats[e].env_steps += static_cast<std::uint64_t>(done);
+    d.episode_step[static_cast<std::size_t>(e)] += done;
+  }
+  return done;
+}
+}  // namespace
+
+void env_steps_fused(const WorldModel& m, WorldData& d, int begin, int end, int num_env_steps) {
+  const int group = batch::lanes();
+  batch::Models models = batch::models_of(m.mr, m.body, m.cfg.sim.dt_s, m.cfg.sim.substeps);
+  models.ground_tail = true;
+  models.ground_radius_m = m.cfg.robot.shape.radius_m;
+  // After a fused run that could not take a single env-step (a robot on the ground, say), the
+  // group goes step by step for a while before it tries again, so a group that stays unfused
+  // pays for the failed try once per kRetryEnvSteps env-steps, not at every one.
+  constexpr int kRetryEnvSteps = 16;
+  int env = begin;
+  for (; env + group <= end; env += group) {
+    int s = 0;
+    while (s < num_env_steps) {
+      const int k = fused_group(m, d, models, env, num_env_steps - s);
+      s += k;
+      const int single = k == 0 ? std::min(kRetryEnvSteps, num_env_steps - s) : std::min(1, num_env_steps - s);
+      for (int j = 0; j < single; ++j) (void)env_steps_batched(m, d, env, env + group);
+      s += single;
+    }
+  }
+  for (; env < end; ++env)
+    for (int s = 0; s < num_env_steps; ++s) env_step(m, d, env);
+}
+
 }  // namespace kestrel::sim::stage

@@ -1,5 +1,5 @@
 // The World: owner of a WorldModel and a WorldData, and the thread pool that runs the stages of
-// sim/world_stages.hpp over a static partition of environments. Summary, state hash, trace and
+// sim/world_stages.hpp over blocks of environments. Summary, state hash, trace and
 // sensor accessors.
 #include "kestrel/sim/world.hpp"
 
@@ -13,6 +13,18 @@ namespace kestrel::sim {
 namespace {
 constexpr int kHookChunkEnvs = 64;  // a multiple of every batch::lanes(); ~40 KB of robot rows
 void world_task(void* context, int worker) { static_cast<World*>(context)->run_slice(worker); }
+// The temporal block's size: about kBlockBytes of environment rows, a multiple of kHookChunkEnvs
+// (so of every lane count). 256 KB leaves room in a 1 MB L2 for the model, the stacks and the
+// prefetches ahead of the block (measured: bench/results/host/world_blocking.csv).
+constexpr std::size_t kBlockBytes = 256 * 1024;
+// The fused path's unit of hand-out: 64 environments (4 lane groups of the widest copy), so that
+// 4,096 environments make 4 blocks per worker at 16 threads (256-environment blocks, one per
+// worker there, left no room to even out the cores' speeds: 9.6-12.3x from 1 to 16 threads).
+constexpr int kFusedBlockEnvs = 64;
+int default_block_envs(std::size_t bytes_per_env) {
+  const std::size_t envs = kBlockBytes / std::max<std::size_t>(bytes_per_env, 1);
+  return static_cast<int>(std::max<std::size_t>(kHookChunkEnvs, envs / kHookChunkEnvs * kHookChunkEnvs));
+}
 }  // namespace
 
 double World::estimate_bytes(const WorldConfig& config) { return estimate_world_bytes(config); }
@@ -26,6 +38,8 @@ std::unique_ptr<World> World::create(const WorldConfig& config, std::string& err
     w->data_.stats[static_cast<std::size_t>(env)].resets = 0;  // the initial reset is not counted
   }
   w->batch_ = stage::batch_eligible(w->model_);
+  w->fused_ = w->batch_ && stage::fused_eligible(w->model_);
+  w->block_envs_ = default_block_envs(w->bytes_per_env());
   w->pool_.reset(new ThreadPool(std::min(config.num_threads, w->model_.num_envs)));
   return w;
 }
@@ -40,36 +54,69 @@ void World::render_sensors(int env) {
 
 void World::obstacles_changed(int env) { stage::obstacles_changed(model_, data_, env); }
 
+void World::set_block_envs(int envs) { block_envs_ = envs > 0 ? envs : default_block_envs(bytes_per_env()); }
+
 bool World::set_batched(bool on) {
   batch_ = on && stage::batch_eligible(model_);
+  fused_ = fused_ && batch_;
   return batch_;
 }
 
-void World::run_slice(int worker) {
-  const int t = pool_ ? pool_->size() : 1;
+bool World::set_fused(bool on) {
+  fused_ = on && batch_ && stage::fused_eligible(model_);
+  return fused_;
+}
+
+void World::run_slice(int /*worker*/) {
   const int n = model_.num_envs;
-  const int begin = static_cast<int>(static_cast<long long>(n) * worker / t);
-  const int end = static_cast<int>(static_cast<long long>(n) * (worker + 1) / t);
-  for (int s = 0; s < pending_steps_; ++s) {
-    // With an after-step hook, the last env-step runs in chunks of kHookChunkEnvs and the hook
-    // reads each chunk's rows right after they were written, while they are still in cache (a
-    // worker's slice of 4096 robots does not fit in L2). Environments are independent, so the
-    // chunking changes no result.
-    const bool hook = after_step_ != nullptr && s + 1 == pending_steps_;
-    const int chunk = hook ? kHookChunkEnvs : end - begin;
-    for (int b = begin; b < end; b += chunk) {
-      const int e = std::min(end, b + chunk);
-      // Batched twin (step_batched.cpp): whole groups of batch::lanes() environments, bit-identical.
-      int env = batch_ ? stage::env_steps_batched(model_, data_, b, e) : b;
-      for (; env < e; ++env) stage::env_step(model_, data_, env);
-      if (hook) after_step_(after_step_context_, b, e);
+  // Work is handed out in blocks from a shared counter (dynamic scheduling), not as one fixed
+  // slice per worker: on a machine whose cores run at different speeds (another tenant's thread
+  // on the same physical core, bench/results/device/README.md) the fast workers take more blocks
+  // instead of waiting for the slowest. Environments never read each other's rows and each one
+  // takes its own env-steps in order, so which worker steps which block changes no result.
+  //
+  // Temporal blocking: each block takes all pending env-steps before its worker takes the next
+  // block, so its rows stay in the core's L2 from one env-step to the next instead of coming back
+  // from L3 or memory at every env-step (a slice of 2,048 robots at 1 KB each overflows a 1-2 MB
+  // L2). The state hash is the same for every block size (tests/sim/engine/world_test.cpp).
+  // Fused env-steps (step_batched.cpp): each lane group takes all of the call's env-steps before
+  // the next, so the blocking is implicit and the block is only the unit of hand-out.
+  const int block = fused_ ? kFusedBlockEnvs : (block_envs_ > 0 ? block_envs_ : n);
+  for (;;) {
+    const int b0 = next_env_.fetch_add(block, std::memory_order_relaxed);
+    if (b0 >= n) break;
+    const int e0 = std::min(n, b0 + block);
+    if (fused_) {
+      // With an after-step hook, chunk by chunk: the hook reads each chunk's rows right after
+      // they were written, while they are still in cache.
+      const int chunk = after_step_ != nullptr ? kHookChunkEnvs : e0 - b0;
+      for (int b = b0; b < e0; b += chunk) {
+        const int e = std::min(e0, b + chunk);
+        stage::env_steps_fused(model_, data_, b, e, pending_steps_);
+        if (after_step_ != nullptr) after_step_(after_step_context_, b, e);
+      }
+      continue;
     }
+    for (int s = 0; s < pending_steps_; ++s) {
+      // With an after-step hook, the last env-step runs in chunks of kHookChunkEnvs and the hook
+      // reads each chunk's rows right after they were written, while they are still in L1.
+      const bool hook = after_step_ != nullptr && s + 1 == pending_steps_;
+      const int chunk = hook ? kHookChunkEnvs : e0 - b0;
+      for (int b = b0; b < e0; b += chunk) {
+        const int e = std::min(e0, b + chunk);
+        // Batched twin (step_batched.cpp): whole groups of batch::lanes() environments, bit-identical.
+        int env = batch_ ? stage::env_steps_batched(model_, data_, b, e) : b;
+        for (; env < e; ++env) stage::env_step(model_, data_, env);
+        if (hook) after_step_(after_step_context_, b, e);
+      }
+    }
+    if (after_step_ != nullptr && pending_steps_ == 0) after_step_(after_step_context_, b0, e0);
   }
-  if (after_step_ != nullptr && pending_steps_ == 0) after_step_(after_step_context_, begin, end);
 }
 
 void World::step(int num_env_steps) {
   pending_steps_ = num_env_steps;
+  next_env_.store(0, std::memory_order_relaxed);
   pool_->run(world_task, this);
   data_.trace_len = std::min(data_.trace_cap, data_.trace_len + num_env_steps);
 }

@@ -268,9 +268,10 @@ TEST(SimBatchStep, EveryKernelCopyBitEqualToScalar) {
     run_twin(false, true, 2);
   }
   batch::use_default_kernel();
-  // The default (unless KESTREL_BATCH_KERNEL asks for another): AVX2 where this CPU runs it.
+  // The default (unless KESTREL_BATCH_KERNEL asks for another): the widest copy this CPU runs.
   if (std::getenv("KESTREL_BATCH_KERNEL") == nullptr) {
-    EXPECT_EQ(batch::kernel_copy(), copies.size() > 1 ? batch::KernelCopy::avx2 : batch::KernelCopy::baseline);
+    EXPECT_EQ(batch::kernel_copy(), copies.back());
+    EXPECT_EQ(batch::kernel_copy(), batch::widest_kernel_copy());
   }
 }
 
@@ -409,6 +410,106 @@ TEST(SimBatchStep, GroundTailAndInlineEnvStepEndsBitIdentical) {
         EXPECT_GT(sa.timeouts, 0u);
         for (int e = 0; e < k.trace_envs; ++e)
           for (int t = 0; t < a->trace_length(); ++t) ASSERT_TRUE(same_bits(a->trace_point(e, t).data(), b->trace_point(e, t).data(), 3));
+      }
+    }
+  batch::use_default_kernel();
+}
+
+// The fused env-steps (World::set_fused, batch::robot_env_steps: a lane group's robots held in
+// registers through the quiet env-steps of a step() call) against the step by step batched path
+// and the scalar path: every stored field of every robot equal bit for bit after calls of 1, 7
+// and 25 env-steps, through what interrupts a fused run (the ground, leaving the bounds,
+// timeouts, traced environments, sampled latencies, out-of-range and non-finite actions written
+// between calls, several physics steps per env-step and integrator substeps).
+TEST(SimBatchStep, FusedEnvStepsBitIdenticalToStepByStepAndScalar) {
+  struct Case {
+    const char* what;
+    bool at_floor;
+    int trace_envs;
+    bool latency;
+    int physics_steps;
+    int substeps;
+    bool random_actions;
+  };
+  const Case cases[] = {
+      {"in the air", false, 0, false, 1, 1, false},
+      {"at the floor, traced", true, 3, false, 1, 1, false},
+      {"sampled latency, 3 physics steps, 2 substeps", false, 0, true, 3, 2, false},
+      {"random actions between calls", false, 0, false, 2, 1, true},
+  };
+  for (batch::KernelCopy copy : runnable_copies())
+    for (const Case& k : cases) {
+      ASSERT_TRUE(batch::use_kernel(copy));
+      SCOPED_TRACE(batch::kernel_name());
+      SCOPED_TRACE(k.what);
+      WorldConfig c = world_config("empty", 53, 2);  // 53: a ragged last group on each thread
+      if (k.at_floor) {
+        c.robot.min_init_position_ratio[2] = 0;
+        c.robot.max_init_position_ratio[2] = 0.05_r;
+        c.task.min_target_ratio[2] = 0;
+        c.task.max_target_ratio[2] = 0.05_r;
+      }
+      c.env.sample_timestep_for_latency = k.latency;
+      c.env.num_physics_steps_per_env_step_mean = static_cast<real>(k.physics_steps);
+      c.sim.substeps = k.substeps;
+      c.task.episode_len_env_steps = 70;
+      auto fused = build(c, true), steps = build(c, true), scalar = build(c, false);
+      ASSERT_EQ(fused->fused(), kTwinBuild) << "the empty world takes the fused env-steps by default";
+      EXPECT_FALSE(steps->set_fused(false));
+      EXPECT_FALSE(scalar->fused());
+      World* w[3] = {fused.get(), steps.get(), scalar.get()};
+      if (k.trace_envs > 0)
+        for (World* x : w) x->enable_trace(k.trace_envs, 300);
+      RngStream rng(5, 0, kPurposeReset);
+      int total = 0;
+      for (int call = 0; total < 300; ++call) {
+        const int n = call % 3 == 0 ? 1 : (call % 3 == 1 ? 7 : 25);
+        if (k.random_actions && call % 2 == 1) {
+          for (int e = 0; e < 53; ++e) {
+            real a[4];
+            for (real& v : a) v = rng.uniform(-3, 3);  // sometimes outside the action range
+            if (e == 11 && call % 4 == 1) a[2] = std::numeric_limits<real>::quiet_NaN();
+            for (World* x : w) std::memcpy(x->action(e, 0), a, sizeof a);
+          }
+        }
+        for (World* x : w) x->step(n);
+        total += n;
+        for (int e = 0; e < 53; ++e) {
+          for (int side = 1; side < 3; ++side) {
+            const World& a = *w[0];
+            const World& b = *w[side];
+            const std::size_t i = static_cast<std::size_t>(e);
+            ASSERT_TRUE(same_body(a.robot_state(e, 0), b.robot_state(e, 0))) << "env " << e << " after " << total << ", side " << side;
+            ASSERT_TRUE(same_lee(a.data().mr_state[i].ctrl.lee, b.data().mr_state[i].ctrl.lee)) << "env " << e << " after " << total;
+            ASSERT_TRUE(same_alloc(a.data().mr_state[i].allocator, b.data().mr_state[i].allocator)) << "env " << e << " after " << total;
+            ASSERT_TRUE(same_motors(a.data().mr_state[i].motors, b.data().mr_state[i].motors)) << "env " << e << " after " << total;
+            ASSERT_TRUE(same_bits(a.contact_force_w(e, 0).data(), b.contact_force_w(e, 0).data(), 3)) << "env " << e;
+            ASSERT_TRUE(same_bits(a.contact_torque_b(e, 0).data(), b.contact_torque_b(e, 0).data(), 3)) << "env " << e;
+            ASSERT_TRUE(same_bits(&a.data().applied_actions[i * kMaxActionDim], &b.data().applied_actions[i * kMaxActionDim], 4));
+            ASSERT_EQ(a.crashed(e, 0), b.crashed(e, 0)) << "env " << e;
+            ASSERT_EQ(a.episode_step(e), b.episode_step(e)) << "env " << e;
+            ASSERT_EQ(a.data().episode_ended[i], b.data().episode_ended[i]) << "env " << e;
+            const EnvStats &x = a.stats(e), &y = b.stats(e);
+            ASSERT_EQ(x.env_steps, y.env_steps);
+            ASSERT_EQ(x.crashes, y.crashes) << "env " << e;
+            ASSERT_EQ(x.resets, y.resets) << "env " << e;
+            ASSERT_EQ(x.timeouts, y.timeouts) << "env " << e;
+            ASSERT_EQ(x.out_of_bounds, y.out_of_bounds) << "env " << e;
+            ASSERT_EQ(std::memcmp(&x.tracking_error_sum_m, &y.tracking_error_sum_m, sizeof(double)), 0) << "env " << e;
+            ASSERT_EQ(std::memcmp(&x.final_distance_sum_m, &y.final_distance_sum_m, sizeof(double)), 0) << "env " << e;
+          }
+        }
+      }
+      EXPECT_EQ(fused->state_hash(), scalar->state_hash());
+      const WorldSummary sa = fused->summary();
+      EXPECT_GT(sa.resets, 53u);
+      if (k.at_floor) {
+        EXPECT_GT(sa.crashes, 0u) << "the robots must reach the ground";
+      }
+      if (k.trace_envs > 0) {
+        for (int e = 0; e < k.trace_envs; ++e)
+          for (int t = 0; t < fused->trace_length(); ++t)
+            ASSERT_TRUE(same_bits(fused->trace_point(e, t).data(), scalar->trace_point(e, t).data(), 3));
       }
     }
   batch::use_default_kernel();

@@ -9,8 +9,8 @@
 // step_rigid_body with Eigen 3.4's quaternion product / transformVector / reduction orders), and
 // SIMD add, sub, mul, div and sqrt round exactly like their scalar forms (-ffp-contract=off keeps
 // the compiler from fusing). The heading's sine and cosine are the core's own sin_cos (Cephes'
-// polynomial, no libm) computed in every lane with its branches as selects; the attitude update's
-// std::sin / std::cos stay scalar per lane (libm's bits). The sequential desaturation of an infeasible command (airmode roll_pitch, the
+// polynomial, no libm) computed in every lane with its branches as selects, and so are the
+// attitude update's (step_rigid_body uses the same sin_cos). The sequential desaturation of an infeasible command (airmode roll_pitch, the
 // default) runs in the lanes too, its per-lane early exits as masks. Rare paths (a non-finite or
 // out-of-range command, a singular force or heading, a desired rotation with trace <= 0, another
 // airmode, a scheduled or dead motor, a clamped motor rate, a non-finite result) are detected per
@@ -113,11 +113,32 @@ bool eligible(const Models& m);
 /// fast path stores, a zero force and the zero torque rotated into the body frame); 0 otherwise.
 unsigned robot_step(const Models& m, const Lane* lanes);
 
+/// What the fused env-steps (robot_env_steps) read and write of each lane's environment besides
+/// its robot: the setpoint the tracking error is measured to, the bounds, and that error's sum.
+struct QuietEnv {
+  const Vec3* setpoint_w = nullptr;
+  const Vec3* lower_w = nullptr;
+  const Vec3* upper_w = nullptr;
+  double* tracking_error_sum_m = nullptr;
+};
+
+/// Up to max_env_steps whole env-steps (physics_steps physics steps each, one constant action) of
+/// lanes() robots in one call, with the robots' state, motor thrusts and contact wrench kept in
+/// registers from one step to the next and stored once at the end: what robot_step (with
+/// Models::ground_tail) does physics step after physics step, and what an env-step's quiet end
+/// does (the tracking error's sum; a robot out of bounds ends the run). It runs an env-step only
+/// if every lane stays on every stage's fast path in all of its physics steps, stays clear of the
+/// ground and in bounds; otherwise it stops before that env-step, leaving it untouched (computed
+/// in registers, never stored) for the caller's step by step path. Returns the env-steps done
+/// (0 .. max_env_steps); the caller counts them (episode step, statistics). Each lane's bits are
+/// those of the same env-steps taken one by one. Requires eligible(m) and m.ground_tail.
+int robot_env_steps(const Models& m, const Lane* lanes, const QuietEnv* envs, int physics_steps, int max_env_steps);
+
 /// Robots per call of the copy in use: 4, 8 or 16.
 int lanes();
 
-/// The copy in use. By default the AVX2 copy where this CPU and build run it (the AVX-512 copy
-/// measured no faster), else the baseline; the environment variable
+/// The copy in use. By default the widest copy this CPU and build run (AVX-512, else AVX2, else
+/// the baseline); the environment variable
 /// KESTREL_BATCH_KERNEL=baseline|avx2|avx512, read once at start-up, asks for another (one the
 /// CPU cannot run is ignored), for side-by-side timings.
 KernelCopy kernel_copy();

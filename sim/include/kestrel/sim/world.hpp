@@ -1,5 +1,5 @@
 // The batched world: N environments, each with one or more robots and its own obstacles, stepped
-// in parallel by a fixed thread pool over a static partition of environment indices.
+// in parallel by a fixed thread pool that hands out blocks of environments (World::run_slice).
 //
 // A World owns a WorldModel (sim/world_model.hpp: compiled once, read-only) and a WorldData
 // (sim/world_data.hpp: every array a step writes, sized once), MuJoCo's mjModel / mjData split,
@@ -14,6 +14,7 @@
 // (golden-hash test in tests/sim/engine/world_test.cpp).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -141,9 +142,9 @@ class World {
   /// environment through obstacle(): recomputes their bounding boxes, restores the sweep order
   /// and re-renders the ray sensors (no heap).
   void obstacles_changed(int env);
-  /// Runs fn(context, begin, end) on each worker of step() right after each chunk [begin, end) of
-  /// its slice of environments has taken its last env-step (same static partition, no extra
-  /// dispatch; chunks of 64 environments, so the rows are still in cache): the rigid Simulator
+  /// Runs fn(context, begin, end) on the worker of step() that stepped chunk [begin, end), right
+  /// after the chunk has taken its last env-step (no extra dispatch; chunks of 64 environments,
+  /// each once per call, so the rows are still in cache): the rigid Simulator
   /// refreshes its flat views there, in parallel. nullptr: nothing.
   using SliceHook = void (*)(void* context, int begin, int end);
   void set_after_step(SliceHook fn, void* context) {
@@ -151,7 +152,8 @@ class World {
     after_step_context_ = context;
   }
 
-  /// Worker entry (public for the thread pool's trampoline).
+  /// Worker entry (public for the thread pool's trampoline): takes blocks of environments from a
+  /// shared counter until none is left.
   void run_slice(int worker);
 
   /// Batched twin of the robot step (sim/batch_step.hpp), on by default where the configuration
@@ -159,6 +161,19 @@ class World {
   /// (tests, bench); returns whether the batched path is in use afterwards.
   bool set_batched(bool on);
   bool batched() const { return batch_; }
+  /// Environments per temporal block of step() (the env-step by env-step path; the fused path
+  /// blocks by lane group): a worker takes a block through all of a call's env-steps before it
+  /// takes the next (rows stay in cache; no result changes). The block is also the unit the
+  /// workers take from the shared counter, so a value >= num_envs gives the whole world to one
+  /// worker. Default: about 256 KB of rows; set_block_envs(0) restores it. For benches and tests.
+  void set_block_envs(int envs);
+  /// Fused env-steps (stage::env_steps_fused, batch::robot_env_steps): a lane group's robots stay
+  /// in registers through the quiet env-steps of a step() call. On by default with the batched
+  /// path where the world allows it; the same bits either way. set_fused(false) turns it off
+  /// (tests, bench); returns whether it is in use afterwards. set_batched(false) turns it off too.
+  bool set_fused(bool on);
+  bool fused() const { return fused_; }
+  int block_envs() const { return block_envs_; }
 
   // Terrain (config().env.terrain, sim/terrain.hpp): shared by every environment.
   const Terrain* terrain() const { return model_.terrain.get(); }
@@ -203,12 +218,15 @@ class World {
   WorldModel model_;  // compiled once by create(); never written by a step
   WorldData data_;    // everything a step writes
 
-  // Threads: static partition, pending env-steps for run_slice.
+  // Threads: pending env-steps and the block counter for run_slice.
   SliceHook after_step_ = nullptr;
   void* after_step_context_ = nullptr;
   std::unique_ptr<ThreadPool> pool_;
   int pending_steps_ = 0;
+  std::atomic<int> next_env_{0};  // the next block's first environment (run_slice hands out blocks)
+  int block_envs_ = 0;            // set by create()
   bool batch_ = false;
+  bool fused_ = false;
 };
 
 

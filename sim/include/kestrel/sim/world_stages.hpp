@@ -61,6 +61,15 @@ bool batch_eligible(const WorldModel& m);
 /// Steps environments [begin, end) by one env-step in groups; returns the first environment it
 /// left to the scalar path (the tail shorter than a group).
 int env_steps_batched(const WorldModel& m, WorldData& d, int begin, int end);
+/// Whether env_steps_fused may run this world: the batched path's worlds whose env-steps can be
+/// quiet (one sphere robot over the ground plane, no moving setpoint, no IMU, heights or ray sensor).
+bool fused_eligible(const WorldModel& m);
+/// Steps environments [begin, end) by num_env_steps env-steps, one lane group after the other:
+/// each group takes its env-steps through batch::robot_env_steps while all of its environments'
+/// env-steps are quiet (nothing but physics in flight and the tracking error), and one at a time
+/// through env_steps_batched otherwise; the tail shorter than a group goes through env_step. The
+/// same bits as num_env_steps calls of the step by step path (environments are independent).
+void env_steps_fused(const WorldModel& m, WorldData& d, int begin, int end, int num_env_steps);
 
 // Sensing (sim/src/engine/sensing.cpp).
 void update_imus(const WorldModel& m, WorldData& d, int env, int robot, const Vec3& linvel_before_w);
