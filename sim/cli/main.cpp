@@ -295,23 +295,30 @@ int run_world(const WorldConfig& cfg, const RunArgs& r, const std::string& label
   rep.say("  memory: %zu bytes per env (%.1f MiB total)\n", world->bytes_per_env(),
               static_cast<double>(world->bytes_per_env()) * world->num_envs() / (1024.0 * 1024.0));
   // Progress line on a terminal (stderr, so the summary on stdout stays clean to compare). The
-  // steps go in chunks of about 8 M env-steps, so the line moves several times a second (0.1 s of
-  // work at 80 M env-steps/s) while each World::step call gives every worker enough to do that
-  // waking the pool's threads costs little (64k-env-step chunks were 16 env-steps at 4,096
-  // environments: ~0.25 ms per thread at 16 threads, against tens of microseconds until the last
-  // worker starts), and the fused env-steps (World::set_fused) load and store a robot once per call:
-  // 1 M env-step chunks were 16 env-steps at 65,536 environments, each robot's ~1 KB read and
-  // written every 16 env-steps, which took memory bandwidth the 16 cores shared. Chunking does not
-  // change the result (a step is the same however it is batched).
+  // steps go in chunks that start at about 8 M env-steps and double while a World::step call takes
+  // under 0.1 s, so the line moves at least every second or so at 10 M env-steps/s, while each
+  // call gives every worker enough to do that waking the pool's threads costs little (64k-env-step
+  // chunks were 16 env-steps at 4,096 environments: ~0.25 ms per thread at 16 threads), and the
+  // fused env-steps (World::set_fused) load and store a robot once per call (fixed 8 M env-step
+  // chunks were 8 env-steps at 1 M environments: each robot's ~1 KB read and written every 8, which
+  // took memory bandwidth the 16 cores share). Chunking does not change the result (a step is the
+  // same however it is batched: tests/sim/engine/world_test.cpp, batch_step_test.cpp).
   const double total = static_cast<double>(r.steps) * world->num_envs();
   ProgressLine progress(stderr, !r.quiet && ProgressLine::stderr_is_terminal(), total);
-  const long long chunk = std::max(1LL, std::min(r.steps, (1LL << 23) / world->num_envs()));
+  // (Starting at 1 M env-steps, a 1-thread run of 1 M environments stayed at one env-step per call,
+  // each 0.2 s, memory-bound at 5 M env-steps/s against 20 M with 8.)
+  long long chunk = std::max(1LL, std::min(r.steps, (1LL << 23) / world->num_envs()));
+  constexpr long long kMaxChunk = 1LL << 30;  // env-steps per call (World::step takes an int count)
   const auto t0 = std::chrono::steady_clock::now();
   for (long long done = 0; done < r.steps;) {
     const long long n = std::min(chunk, r.steps - done);
+    const auto c0 = std::chrono::steady_clock::now();
     world->step(static_cast<int>(n));
     done += n;
     progress.update(static_cast<double>(done) * world->num_envs());
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count() < 0.1 &&
+        chunk * 2 * world->num_envs() <= kMaxChunk)
+      chunk *= 2;
   }
   progress.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
