@@ -31,6 +31,17 @@ inline void prefetch(const T* p) {
   __builtin_prefetch(c + sizeof(T) - 1, 1);
 }
 
+// A lane's pointers into robot i's rows (the applied action at `applied`).
+inline void point_lane(WorldData& d, std::size_t i, const real* applied, batch::Lane& lane) {
+  lane.state = &d.state[i];
+  lane.ctrl = &d.mr_state[i].ctrl;
+  lane.alloc = &d.mr_state[i].allocator;
+  lane.motors = &d.mr_state[i].motors;
+  lane.action = applied;
+  lane.contact_force_w = &d.contact_force_w[i];
+  lane.contact_torque_b = &d.contact_torque_b[i];
+}
+
 // `lanes` is the caller's scratch (num_lanes entries), every field rewritten here: an array of
 // batch::Lane declared per call would be zero-filled per call (its members have initialisers).
 // Returns the lanes whose collision pass the kernel did (batch::robot_step).
@@ -41,13 +52,7 @@ unsigned robot_dynamics_batch(const WorldModel& m, WorldData& d, int env0, int n
     const std::size_t i = m.index(env, 0);
     real* applied = &d.applied_actions[i * kMaxActionDim];
     if ((new_action_mask >> l) & 1u) std::memcpy(applied, &d.actions[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
-    lanes[l].state = &d.state[i];
-    lanes[l].ctrl = &d.mr_state[i].ctrl;
-    lanes[l].alloc = &d.mr_state[i].allocator;
-    lanes[l].motors = &d.mr_state[i].motors;
-    lanes[l].action = applied;
-    lanes[l].contact_force_w = &d.contact_force_w[i];
-    lanes[l].contact_torque_b = &d.contact_torque_b[i];
+    point_lane(d, i, applied, lanes[l]);
     if (models.ground_tail) {
       const real plane_z = m.cfg.env.create_ground_plane ? ground_plane_z(d, env) : -std::numeric_limits<real>::infinity();
       lanes[l].ground_z = d.num_obstacles[env] == 0 ? plane_z : std::numeric_limits<real>::quiet_NaN();
@@ -192,13 +197,7 @@ int fused_group(const WorldModel& m, WorldData& d, const batch::Models& models, 
     const std::size_t i = m.index(e, 0);
     real* applied = &d.applied_actions[i * kMaxActionDim];
     std::memcpy(applied, &d.actions[i * kMaxActionDim], sizeof(real) * kMaxActionDim);
-    lanes[l].state = &d.state[i];
-    lanes[l].ctrl = &d.mr_state[i].ctrl;
-    lanes[l].alloc = &d.mr_state[i].allocator;
-    lanes[l].motors = &d.mr_state[i].motors;
-    lanes[l].action = applied;
-    lanes[l].contact_force_w = &d.contact_force_w[i];
-    lanes[l].contact_torque_b = &d.contact_torque_b[i];
+    point_lane(d, i, applied, lanes[l]);
     lanes[l].ground_z = m.cfg.env.create_ground_plane ? ground_plane_z(d, e) : -std::numeric_limits<real>::infinity();
     envs[l].setpoint_w = &d.setpoint_w[i];
     envs[l].lower_w = &d.lower_w[e];

@@ -15,7 +15,8 @@ constexpr int kHookChunkEnvs = 64;  // a multiple of every batch::lanes(); ~40 K
 void world_task(void* context, int worker) { static_cast<World*>(context)->run_slice(worker); }
 // The temporal block's size: about kBlockBytes of environment rows, a multiple of kHookChunkEnvs
 // (so of every lane count). 256 KB leaves room in a 1 MB L2 for the model, the stacks and the
-// prefetches ahead of the block (measured: bench/results/host/world_blocking.csv).
+// prefetches ahead of the block (bench/results/device/blocking_xeon16_runs.csv: 1.2-1.25x at
+// 65,536 environments on 16 threads with it, before the fused env-steps; nothing at 4,096).
 constexpr std::size_t kBlockBytes = 256 * 1024;
 // The fused path's unit of hand-out: 64 environments (4 lane groups of the widest copy), so that
 // 4,096 environments make 4 blocks per worker at 16 threads (256-environment blocks, one per
@@ -81,7 +82,8 @@ void World::run_slice(int /*worker*/) {
   // L2). The state hash is the same for every block size (tests/sim/engine/world_test.cpp).
   // Fused env-steps (step_batched.cpp): each lane group takes all of the call's env-steps before
   // the next, so the blocking is implicit and the block is only the unit of hand-out.
-  const int block = fused_ ? kFusedBlockEnvs : (block_envs_ > 0 ? block_envs_ : n);
+  // (At most n: the counter then stays below n + workers x n.)
+  const int block = std::min(n, fused_ ? kFusedBlockEnvs : (block_envs_ > 0 ? block_envs_ : n));
   for (;;) {
     const int b0 = next_env_.fetch_add(block, std::memory_order_relaxed);
     if (b0 >= n) break;
