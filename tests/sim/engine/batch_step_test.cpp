@@ -74,6 +74,20 @@ bool same_bits(const real* a, const real* b, int n) { return std::memcmp(a, b, s
                                        << b.thrust_N[1] << " " << b.thrust_N[2] << " " << b.thrust_N[3];
 }
 
+// An environment's statistics, the double sums bit for bit.
+::testing::AssertionResult same_stats(const EnvStats& x, const EnvStats& y) {
+  if (x.env_steps == y.env_steps && x.crashes == y.crashes && x.resets == y.resets && x.timeouts == y.timeouts &&
+      x.out_of_bounds == y.out_of_bounds && x.successes == y.successes &&
+      std::memcmp(&x.tracking_error_sum_m, &y.tracking_error_sum_m, sizeof(double)) == 0 &&
+      std::memcmp(&x.final_distance_sum_m, &y.final_distance_sum_m, sizeof(double)) == 0)
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "statistics differ: env-steps " << x.env_steps << " vs " << y.env_steps << ", crashes "
+                                       << x.crashes << " vs " << y.crashes << ", resets " << x.resets << " vs " << y.resets
+                                       << ", timeouts " << x.timeouts << " vs " << y.timeouts << ", out of bounds "
+                                       << x.out_of_bounds << " vs " << y.out_of_bounds << ", tracking error sum "
+                                       << x.tracking_error_sum_m << " vs " << y.tracking_error_sum_m;
+}
+
 // The constant models of the default robot (World::create's), with a settable integrator setup.
 struct Stack {
   ControllerParams ctrl;
@@ -386,15 +400,7 @@ TEST(SimBatchStep, GroundTailAndInlineEnvStepEndsBitIdentical) {
         for (int e = 0; e < 45; ++e) {
           ASSERT_TRUE(same_body(a->robot_state(e, 0), b->robot_state(e, 0))) << "env " << e << " step " << s;
           ASSERT_TRUE(same_bits(a->contact_force_w(e, 0).data(), b->contact_force_w(e, 0).data(), 3)) << "env " << e << " step " << s;
-          const EnvStats &x = a->stats(e), &y = b->stats(e);
-          ASSERT_EQ(x.env_steps, y.env_steps);
-          ASSERT_EQ(x.crashes, y.crashes) << "env " << e;
-          ASSERT_EQ(x.resets, y.resets) << "env " << e;
-          ASSERT_EQ(x.timeouts, y.timeouts) << "env " << e;
-          ASSERT_EQ(x.out_of_bounds, y.out_of_bounds) << "env " << e;
-          ASSERT_EQ(x.successes, y.successes) << "env " << e;
-          ASSERT_EQ(std::memcmp(&x.tracking_error_sum_m, &y.tracking_error_sum_m, sizeof(double)), 0) << "env " << e;
-          ASSERT_EQ(std::memcmp(&x.final_distance_sum_m, &y.final_distance_sum_m, sizeof(double)), 0) << "env " << e;
+          ASSERT_TRUE(same_stats(a->stats(e), b->stats(e))) << "env " << e << " step " << s;
         }
       }
       EXPECT_EQ(a->state_hash(), b->state_hash());
@@ -489,14 +495,7 @@ TEST(SimBatchStep, FusedEnvStepsBitIdenticalToStepByStepAndScalar) {
             ASSERT_EQ(a.crashed(e, 0), b.crashed(e, 0)) << "env " << e;
             ASSERT_EQ(a.episode_step(e), b.episode_step(e)) << "env " << e;
             ASSERT_EQ(a.data().episode_ended[i], b.data().episode_ended[i]) << "env " << e;
-            const EnvStats &x = a.stats(e), &y = b.stats(e);
-            ASSERT_EQ(x.env_steps, y.env_steps);
-            ASSERT_EQ(x.crashes, y.crashes) << "env " << e;
-            ASSERT_EQ(x.resets, y.resets) << "env " << e;
-            ASSERT_EQ(x.timeouts, y.timeouts) << "env " << e;
-            ASSERT_EQ(x.out_of_bounds, y.out_of_bounds) << "env " << e;
-            ASSERT_EQ(std::memcmp(&x.tracking_error_sum_m, &y.tracking_error_sum_m, sizeof(double)), 0) << "env " << e;
-            ASSERT_EQ(std::memcmp(&x.final_distance_sum_m, &y.final_distance_sum_m, sizeof(double)), 0) << "env " << e;
+            ASSERT_TRUE(same_stats(a.stats(e), b.stats(e))) << "env " << e << " after " << total;
           }
         }
       }
