@@ -59,11 +59,12 @@ void World::set_block_envs(int envs) { block_envs_ = envs > 0 ? envs : default_b
 
 bool World::set_batched(bool on) {
   batch_ = on && stage::batch_eligible(model_);
-  fused_ = fused_ && batch_;
+  fused_ = fused_wanted_ && batch_ && stage::fused_eligible(model_);
   return batch_;
 }
 
 bool World::set_fused(bool on) {
+  fused_wanted_ = on;
   fused_ = on && batch_ && stage::fused_eligible(model_);
   return fused_;
 }

@@ -463,6 +463,11 @@ TEST(SimBatchStep, FusedEnvStepsBitIdenticalToStepByStepAndScalar) {
       ASSERT_EQ(fused->fused(), kTwinBuild) << "the empty world takes the fused env-steps by default";
       EXPECT_FALSE(steps->set_fused(false));
       EXPECT_FALSE(scalar->fused());
+      // set_batched turns the fused path off and back on, and keeps a set_fused(false).
+      EXPECT_FALSE(fused->set_batched(false) || fused->fused());
+      EXPECT_EQ(fused->set_batched(true) && fused->fused(), kTwinBuild);
+      steps->set_batched(true);
+      EXPECT_FALSE(steps->fused());
       World* w[3] = {fused.get(), steps.get(), scalar.get()};
       if (k.trace_envs > 0)
         for (World* x : w) x->enable_trace(k.trace_envs, 300);

@@ -170,7 +170,8 @@ class World {
   /// Fused env-steps (stage::env_steps_fused, batch::robot_env_steps): a lane group's robots stay
   /// in registers through the quiet env-steps of a step() call. On by default with the batched
   /// path where the world allows it; the same bits either way. set_fused(false) turns it off
-  /// (tests, bench); returns whether it is in use afterwards. set_batched(false) turns it off too.
+  /// (tests, bench); returns whether it is in use afterwards. It needs the batched path: off while
+  /// set_batched(false) holds, back (unless set_fused(false) was asked) with set_batched(true).
   bool set_fused(bool on);
   bool fused() const { return fused_; }
   int block_envs() const { return block_envs_; }
@@ -227,6 +228,7 @@ class World {
   int block_envs_ = 0;            // set by create()
   bool batch_ = false;
   bool fused_ = false;
+  bool fused_wanted_ = true;  // set_fused's last request
 };
 
 
