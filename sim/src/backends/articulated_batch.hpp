@@ -5,7 +5,8 @@
 // (Eigen's 3-term sums resolved to the order Eigen 3.4 evaluates them, a0 + (a1 + a2), as the
 // multirotor's kernel does), so every lane's result has the bits of the scalar step:
 // tests/sim/backends/articulated_batch_test.cpp compares them over random states, contacts,
-// limits and warm starts. Internal to sim/src (articulated.cpp is its only user).
+// limits and warm starts. Internal to sim/src: its users are the articulated backend (articulated.cpp) and the SO-101
+// pick-and-place worlds (manipulation/pick_place.cpp, PickPlaceWorld::step_batch).
 //
 // What the lanes share: the model (no per-robot inertia randomisation) and the solver's row layout.
 // Robots whose contacts or active joint limits differ still share a step: the rows are the union

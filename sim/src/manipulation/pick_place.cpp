@@ -9,6 +9,7 @@
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
 #include "kestrel/sim/state_hash.hpp"
+#include "../backends/articulated_batch.hpp"
 
 namespace kestrel::sim {
 
@@ -16,7 +17,6 @@ namespace dy = kestrel::dynamics;
 
 namespace {
 constexpr real kContactMargin_m = 0.002_r;  // speculative contacts (contact.hpp)
-constexpr int kWarmRows = 3 * PickPlaceWorld::kMaxContacts;
 constexpr int kBoxParts = 5;  // floor, walls at -x, +x, -y, +y
 const char* const kJointNames[PickPlaceWorld::kJoints] = {"shoulder_pan", "shoulder_lift", "elbow_flex",
                                                           "wrist_flex",   "wrist_roll",    "gripper"};
@@ -32,9 +32,15 @@ struct PickPlaceWorld::Impl {
   RobotMultibody model;  // the arm's bodies, then the cube (a free body from the world)
   dy::MultibodyData<kMaxRobotBodies> data;
   dy::ConstraintData<kMaxRobotBodies, kMaxContacts> cd;
-  dy::WarmStart<kWarmRows> warm;
+  legged_batch::Warm warm;  // the batched step's warm start (its first 96 rows; more start from zero)
   dy::ContactPoint contacts[kMaxContacts];
   std::vector<dy::CollisionShape> arm_shapes;  // sized at init
+  std::vector<real> arm_radius;                 // bounding_radius of each, at init
+  std::vector<Vec3> arm_centre_w;               // each one's centre at the step's poses (collide())
+  real cube_radius = 0;
+  real box_radius[kBoxParts] = {};                      // the box's parts' (world shapes: their centre is p_b)
+  Vec3 box_centre_w = Vec3::Zero();             // a sphere around all five parts (place_box)
+  real box_all_radius = 0;
   dy::CollisionShape cube;
   dy::CollisionShape box[kBoxParts];            // world shapes (body -1), placed at reset
   dy::HalfSpace table;
@@ -121,7 +127,9 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
     if (g.name == "fixed_jaw_pad") pad_body_[0] = g.body;
     if (g.name == "moving_jaw_pad") pad_body_[1] = g.body;
     im.arm_shapes.push_back(s);
+    im.arm_radius.push_back(dy::bounding_radius(s));
   }
+  im.arm_centre_w.assign(im.arm_shapes.size(), Vec3::Zero());
   if (pad_body_[0] < 0 || pad_body_[1] < 0) {
     error = fpre + "expected the geoms \"fixed_jaw_pad\" and \"moving_jaw_pad\" (the gripper's pads)";
     return false;
@@ -151,6 +159,7 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
   im.cube.type = dy::ShapeType::box;
   im.cube.size = Vec3::Constant(cfg.cube_half_m);
   im.cube.friction = cfg.cube_friction;
+  im.cube_radius = dy::bounding_radius(im.cube);
   im.table = dy::HalfSpace();
   im.table.friction = cfg.table_friction;
   for (dy::CollisionShape& b : im.box) {
@@ -162,6 +171,7 @@ bool PickPlaceWorld::init(const PickPlaceConfig& c, std::uint64_t seed, std::uin
   im.params = dy::ConstraintParams();
   im.params.iterations = cfg.solver_iterations;
   im.params.poses_current = true;  // step() runs forward_kinematics into im.cd for its collisions
+  batch_ok_ = legged_batch::eligible(im.model);
   cfg_ = cfg;
   robot_ = std::move(robot);
   rng_ = RngStream(seed, env_index, kPurposeObjectPose);
@@ -195,6 +205,12 @@ void PickPlaceWorld::place_box(const Vec3& box_c) {
     im.box[3 + s].p_b = box_c + Vec3(0, sign * (in + w / 2), h / 2);
     im.box[3 + s].size = Vec3(in, w / 2, h / 2);
   }
+  im.box_centre_w = box_c + Vec3(0, 0, h / 2);
+  im.box_all_radius = 0;
+  for (int p = 0; p < kBoxParts; ++p) {
+    im.box_radius[p] = dy::bounding_radius(im.box[p]);
+    im.box_all_radius = std::max(im.box_all_radius, (im.box[p].p_b - im.box_centre_w).norm() + im.box_radius[p]);
+  }
   state_.box_pos_w = box_c;
 }
 
@@ -226,54 +242,186 @@ void PickPlaceWorld::refresh() {
   state_.cube_quat_xyzw = Vec4(q_[kJoints + 3], q_[kJoints + 4], q_[kJoints + 5], q_[kJoints + 6]);
 }
 
-Status PickPlaceWorld::step(const real* joint_targets_rad) {
-  Impl& im = *impl_;
+void PickPlaceWorld::set_targets(const real* joint_targets_rad) {
   for (int j = 0; j < kJoints; ++j)
     if (std::isfinite(joint_targets_rad[j])) target_[j] = std::min(std::max(joint_targets_rad[j], lower_[j]), upper_[j]);
+}
+
+void PickPlaceWorld::servo_torques(real* tau, real* kp, real* kd) const {
+  for (int k = 0; k < impl_->model.num_dofs; ++k) tau[k] = kp[k] = kd[k] = 0;
+  for (int j = 0; j < kJoints; ++j) {
+    const real t = kp_[j] * (target_[j] - q_[j]) - kd_[j] * qd_[j];
+    tau[j] = std::min(std::max(t, -effort_[j]), effort_[j]);
+    if (std::fabs(t) < effort_[j]) {  // unclipped: the servo's gains act implicitly (contact.hpp)
+      kp[j] = kp_[j];
+      kd[j] = kd_[j];
+    }
+  }
+}
+
+int PickPlaceWorld::collide() {
+  Impl& im = *impl_;
+  const dy::Transform* X = im.cd.X_world;
+  const dy::Transform world;
+  int n = 0;
+  auto room = [&]() { return std::max(0, kMaxContacts - n); };
+  auto take = [&](int found) { n += std::min(found, room()); };
+  // The broad phase: every moving shape's centre once per step, and a pair's narrow phase
+  // (collide_shapes) only where collide_shapes' own bounding-sphere test, the same expression on
+  // the same centres, would not reject it, so the contacts are the ones it gives without this (a
+  // standing arm's 15 shapes against the cube and the box's 5 parts, 90 pairs, ask for a few).
+  // Against the table: no shape whose bounding sphere is clear of it by the margin and 0.1 mm (no
+  // rounding of collide_halfspace's gaps comes near that).
+  const int ns = static_cast<int>(im.arm_shapes.size());
+  Vec3 c_cube;
+  Mat3 R_unused;
+  dy::shape_pose(im.cube, X[cube_body_], c_cube, R_unused);
+  for (int i = 0; i < ns; ++i) dy::shape_pose(im.arm_shapes[static_cast<std::size_t>(i)], X[im.arm_shapes[static_cast<std::size_t>(i)].body],
+                                               im.arm_centre_w[static_cast<std::size_t>(i)], R_unused);
+  auto near = [&](const Vec3& ca, real ra, const Vec3& cb, real rb) { return !((ca - cb).norm() > ra + rb + kContactMargin_m); };
+  auto near_table = [&](const Vec3& c, real r) {
+    return !(im.table.normal_w.dot(c) - im.table.offset_m - r > kContactMargin_m + 1e-4_r);
+  };
+  // Pair kinds in the order of their key ranges, each kind's pairs in ascending keys, so the list
+  // ascends (what the batched step needs to match contacts across worlds; the scalar step takes
+  // the same list, so both give the same bits).
+  for (int i = 0; i < ns; ++i) {
+    const std::size_t si = static_cast<std::size_t>(i);
+    const dy::CollisionShape& s = im.arm_shapes[si];
+    if (near(im.arm_centre_w[si], im.arm_radius[si], c_cube, im.cube_radius))
+      take(dy::collide_shapes(s, X[s.body], im.cube, X[cube_body_], kContactMargin_m, im.contacts + n, room(), kKeyArmCube + 16 * i));
+  }
+  for (int i = 0; i < ns; ++i) {
+    const std::size_t si = static_cast<std::size_t>(i);
+    if (near_table(im.arm_centre_w[si], im.arm_radius[si]))
+      take(dy::collide_halfspace(&im.arm_shapes[si], 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyArmTable / 8 + i));
+  }
+  if (near_table(c_cube, im.cube_radius))
+    take(dy::collide_halfspace(&im.cube, 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyCubeTable / 8));
+  for (int p = 0; p < kBoxParts; ++p)
+    if (near(c_cube, im.cube_radius, im.box[p].p_b, im.box_radius[p]))
+      take(dy::collide_shapes(im.cube, X[cube_body_], im.box[p], world, kContactMargin_m, im.contacts + n, room(), kKeyCubeBox + 16 * p));
+  for (int i = 0; i < ns; ++i) {
+    const std::size_t si = static_cast<std::size_t>(i);
+    const dy::CollisionShape& s = im.arm_shapes[si];
+    // The whole box far (its sphere holds every part's; 0.1 mm for rounding, as near_table).
+    if ((im.arm_centre_w[si] - im.box_centre_w).norm() > im.arm_radius[si] + im.box_all_radius + kContactMargin_m + 1e-4_r) continue;
+    for (int p = 0; p < kBoxParts; ++p)
+      if (near(im.arm_centre_w[si], im.arm_radius[si], im.box[p].p_b, im.box_radius[p]))
+        take(dy::collide_shapes(s, X[s.body], im.box[p], world, kContactMargin_m, im.contacts + n, room(), kKeyArmBox + 16 * (8 * i + p)));
+  }
+  return n;
+}
+
+void PickPlaceWorld::physics_step_done(int n) {
+  const Impl& im = *impl_;
+  num_contacts_ = n;
+  real grip = 0;
+  for (int c = 0; c < n; ++c) {
+    const dy::ContactPoint& ct = im.contacts[c];
+    if ((ct.body == pad_body_[0] || ct.body == pad_body_[1]) && ct.body_b == cube_body_)
+      grip += std::fabs(im.cd.contact_force_w[c].dot(ct.normal_w));
+  }
+  grip_force_N_ = grip;
+}
+
+Status PickPlaceWorld::step(const real* joint_targets_rad) {
+  Impl& im = *impl_;
+  set_targets(joint_targets_rad);
   Status st = Status::ok;
   const RobotMultibody& m = im.model;
   for (int k = 0; k < cfg_.decimation; ++k) {
-    real tau[dy::max_dofs<kMaxRobotBodies>()] = {}, kp[dy::max_dofs<kMaxRobotBodies>()] = {},
-         kd[dy::max_dofs<kMaxRobotBodies>()] = {};
-    for (int j = 0; j < kJoints; ++j) {
-      const real t = kp_[j] * (target_[j] - q_[j]) - kd_[j] * qd_[j];
-      tau[j] = std::min(std::max(t, -effort_[j]), effort_[j]);
-      if (std::fabs(t) < effort_[j]) {  // unclipped: the servo's gains act implicitly (contact.hpp)
-        kp[j] = kp_[j];
-        kd[j] = kd_[j];
-      }
-    }
+    real tau[kDofs], kp[kDofs], kd[kDofs];
+    servo_torques(tau, kp, kd);
     dy::forward_kinematics(m, im.data, q_, im.cd.X_world);
-    const dy::Transform* X = im.cd.X_world;
-    const dy::Transform world;
-    int n = 0;
-    auto room = [&]() { return std::max(0, kMaxContacts - n); };
-    auto take = [&](int found) { n += std::min(found, room()); };
-    const int ns = static_cast<int>(im.arm_shapes.size());
-    for (int i = 0; i < ns; ++i) {
-      const dy::CollisionShape& s = im.arm_shapes[static_cast<std::size_t>(i)];
-      take(dy::collide_shapes(s, X[s.body], im.cube, X[cube_body_], kContactMargin_m, im.contacts + n, room(), kKeyArmCube + 16 * i));
-      take(dy::collide_halfspace(&s, 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyArmTable / 8 + i));
-      for (int p = 0; p < kBoxParts; ++p)
-        take(dy::collide_shapes(s, X[s.body], im.box[p], world, kContactMargin_m, im.contacts + n, room(),
-                                kKeyArmBox + 16 * (8 * i + p)));
-    }
-    take(dy::collide_halfspace(&im.cube, 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyCubeTable / 8));
-    for (int p = 0; p < kBoxParts; ++p)
-      take(dy::collide_shapes(im.cube, X[cube_body_], im.box[p], world, kContactMargin_m, im.contacts + n, room(), kKeyCubeBox + 16 * p));
+    const int n = collide();
     st = dy::step_constrained(m, im.data, im.cd, q_, qd_, tau, cfg_.dt_s, im.contacts, n, im.params, kp, kd, &im.warm);
     if (st != Status::ok) break;
-    num_contacts_ = n;
-    real grip = 0;
-    for (int c = 0; c < n; ++c) {
-      const dy::ContactPoint& ct = im.contacts[c];
-      if ((ct.body == pad_body_[0] || ct.body == pad_body_[1]) && ct.body_b == cube_body_)
-        grip += std::fabs(im.cd.contact_force_w[c].dot(ct.normal_w));
-    }
-    grip_force_N_ = grip;
+    physics_step_done(n);
   }
   refresh();
   return st;
+}
+
+int PickPlaceWorld::batch_lanes() const { return batch_ok_ ? legged_batch::lanes() : 0; }
+
+std::size_t PickPlaceWorld::batch_scratch_bytes() { return legged_batch::scratch_bytes(); }
+
+int PickPlaceWorld::step_batch(PickPlaceWorld* const* worlds, const real* const* joint_targets_rad, int count, Status* status,
+                               void* scratch) {
+  if (count <= 0) return 0;
+  const PickPlaceWorld& w0 = *worlds[0];
+  bool together = count <= w0.batch_lanes() && scratch != nullptr;
+  for (int l = 1; l < count && together; ++l)
+    together = worlds[l]->cfg_.decimation == w0.cfg_.decimation && worlds[l]->cfg_.dt_s == w0.cfg_.dt_s &&
+               worlds[l]->cfg_.solver_iterations == w0.cfg_.solver_iterations &&
+               worlds[l]->impl_->model.num_dofs == w0.impl_->model.num_dofs;
+  if (!together) {  // one at a time, as step()
+    for (int l = 0; l < count; ++l) status[l] = worlds[l]->step(joint_targets_rad[l]);
+    return 0;
+  }
+  const RobotMultibody& m = w0.impl_->model;
+  dy::ConstraintParams batch_params = w0.impl_->params;  // poses_current: the batch's kinematics, in its scratch
+  dy::ConstraintParams alone = w0.impl_->params;
+  alone.poses_current = false;  // im.data holds no kinematics of this q: the scalar step computes them
+  const real dt = w0.cfg_.dt_s;
+  real tau[legged_batch::kMaxLanes][kDofs], kp[legged_batch::kMaxLanes][kDofs], kd[legged_batch::kMaxLanes][kDofs];
+  for (int l = 0; l < count; ++l) {
+    worlds[l]->set_targets(joint_targets_rad[l]);
+    status[l] = Status::ok;
+  }
+  int batched = 0;
+  for (int k = 0; k < w0.cfg_.decimation; ++k) {
+    // The worlds still stepping (step() stops a world's action at its first refused physics step).
+    PickPlaceWorld* live[legged_batch::kMaxLanes];
+    int idx[legged_batch::kMaxLanes];
+    int cnt = 0;
+    for (int l = 0; l < count; ++l)
+      if (status[l] == Status::ok) live[cnt] = worlds[l], idx[cnt++] = l;
+    if (cnt == 0) break;
+    const real* qs[legged_batch::kMaxLanes];
+    dy::Transform* Xs[legged_batch::kMaxLanes];
+    for (int l = 0; l < cnt; ++l) {
+      qs[l] = live[l]->q_;
+      Xs[l] = live[l]->impl_->cd.X_world;
+    }
+    legged_batch::kinematics(m, qs, cnt, Xs, scratch);
+    legged_batch::Lane lanes[legged_batch::kMaxLanes];
+    int n[legged_batch::kMaxLanes];
+    for (int l = 0; l < cnt; ++l) {
+      PickPlaceWorld& w = *live[l];
+      w.servo_torques(tau[l], kp[l], kd[l]);
+      n[l] = w.collide();
+      legged_batch::Lane& ln = lanes[l];
+      ln.q = w.q_;
+      ln.qd = w.qd_;
+      ln.tau = tau[l];
+      ln.kp = kp[l];
+      ln.kd = kd[l];
+      ln.contacts = w.impl_->contacts;
+      ln.num_contacts = n[l];
+      ln.warm = &w.impl_->warm;
+      ln.contact_force_w = w.impl_->cd.contact_force_w;
+    }
+    const unsigned done = legged_batch::step(m, batch_params, dt, lanes, cnt, scratch);
+    for (int l = 0; l < cnt; ++l) {
+      PickPlaceWorld& w = *live[l];
+      Impl& im = *w.impl_;
+      if ((done >> l) & 1u) {
+        ++batched;
+      } else {
+        const Status st = dy::step_constrained(im.model, im.data, im.cd, w.q_, w.qd_, tau[l], dt, im.contacts, n[l], alone, kp[l], kd[l],
+                                               &im.warm);
+        if (st != Status::ok) {
+          status[idx[l]] = st;
+          continue;
+        }
+      }
+      w.physics_step_done(n[l]);
+    }
+  }
+  for (int l = 0; l < count; ++l) worlds[l]->refresh();
+  return batched;
 }
 
 int PickPlaceWorld::scene_shapes(PickPlaceShape* out, int capacity) const {

@@ -73,6 +73,10 @@ class PickPlaceSimulator final : public Simulator {
     episode_step_.assign(n, 0);
     const int threads = std::max(1, std::min(c.num_threads, num_envs_));
     pool_ = std::make_unique<ThreadPool>(threads);
+    lanes_ = std::min(w0.batch_lanes(), 64);
+    if (lanes_ > 0)  // one batch scratch per worker, 64-byte aligned (operator new of an aligned type)
+      for (int t = 0; t < threads; ++t)
+        scratch_.push_back(std::unique_ptr<Line[]>(new Line[(PickPlaceWorld::batch_scratch_bytes() + sizeof(Line) - 1) / sizeof(Line)]));
     for (int e = 0; e < num_envs_; ++e) refresh(e);
     return true;
   }
@@ -153,7 +157,16 @@ class PickPlaceSimulator final : public Simulator {
   }
 
  protected:
-  void advance() override { for_each_env(&PickPlaceSimulator::step_env, this); }
+  // The worlds in blocks of the batched step's lanes on each worker (PickPlaceWorld::step_batch:
+  // every world gets the bits of its own step(), so the partition changes no result).
+  void advance() override {
+    if (lanes_ <= 0) {
+      for_each_env(&PickPlaceSimulator::step_env, this);
+      return;
+    }
+    Job job{nullptr, this, num_envs_, pool_->size()};
+    pool_->run(&PickPlaceSimulator::step_blocks, &job);
+  }
   bool set_root_states(const int* env_ids, int count, const real* pos_w, const real* quat_xyzw, const real* lin_vel_w,
                        const real* ang_vel_w) override {
     (void)env_ids, (void)count, (void)pos_w, (void)quat_xyzw, (void)lin_vel_w, (void)ang_vel_w;
@@ -172,6 +185,26 @@ class PickPlaceSimulator final : public Simulator {
     const int begin = static_cast<int>(static_cast<long long>(job.n) * worker / job.threads);
     const int end = static_cast<int>(static_cast<long long>(job.n) * (worker + 1) / job.threads);
     for (int e = begin; e < end; ++e) job.fn(job.ctx, e);
+  }
+  static void step_blocks(void* job_v, int worker) {
+    const Job& job = *static_cast<const Job*>(job_v);
+    PickPlaceSimulator& self = *static_cast<PickPlaceSimulator*>(job.ctx);
+    const int begin = static_cast<int>(static_cast<long long>(job.n) * worker / job.threads);
+    const int end = static_cast<int>(static_cast<long long>(job.n) * (worker + 1) / job.threads);
+    void* scratch = self.scratch_[static_cast<std::size_t>(worker)].get();
+    PickPlaceWorld* worlds[64];
+    const real* targets[64];
+    Status status[64];
+    for (int e0 = begin; e0 < end; e0 += self.lanes_) {
+      const int count = std::min(self.lanes_, end - e0);
+      for (int l = 0; l < count; ++l) {
+        worlds[l] = &self.world(e0 + l);
+        targets[l] = &self.actions_[static_cast<std::size_t>(e0 + l) * kJ];
+      }
+      (void)PickPlaceWorld::step_batch(worlds, targets, count, status, scratch);
+      for (int l = 0; l < count; ++l)
+        if (status[l] != Status::ok) ++self.step_errors_[static_cast<std::size_t>(e0 + l)];
+    }
   }
   static void step_env(void* self_v, int env) {
     PickPlaceSimulator& self = *static_cast<PickPlaceSimulator*>(self_v);
@@ -208,6 +241,11 @@ class PickPlaceSimulator final : public Simulator {
 
   std::vector<std::unique_ptr<PickPlaceWorld>> worlds_;
   std::unique_ptr<ThreadPool> pool_;
+  struct alignas(64) Line {
+    unsigned char b[64];
+  };
+  int lanes_ = 0;  // worlds per step_batch call (0: one at a time)
+  std::vector<std::unique_ptr<Line[]>> scratch_;
   std::vector<EnvStats> stats_;
   std::vector<std::uint64_t> step_errors_;
   std::vector<int> episode_step_;

@@ -3,14 +3,19 @@
 // its range and reproducible per seed and environment; the scripted pick and place lifts the cube
 // to the commanded height, carries it without slipping and leaves it in the box, by friction
 // alone (with a gripper too weak to squeeze, the same script leaves the cube behind); no heap in
-// a step.
+// a step; several worlds stepped at once (step_batch) get the bits of their own steps.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "heap_counter.hpp"
+#include "kestrel/sim/batch_step.hpp"
 #include "kestrel/sim/pick_place.hpp"
 
 using namespace kestrel;
@@ -188,4 +193,80 @@ TEST(PickPlace, AStepNeitherAllocatesNorAcceptsNonFiniteTargets) {
   bad.robot_file = "/nonexistent/so101.xml";
   EXPECT_FALSE(w2.init(bad, 1, 0, err));
   EXPECT_NE(err.find("/nonexistent/so101.xml"), std::string::npos) << err;
+}
+
+// step_batch (one world per SIMD lane of the batched articulated step) gives every world the bits
+// its own step() gives it: worlds in different phases of the script, some pushed off it by noise
+// (into the table, the box, the cube), a NaN target, fewer worlds than lanes, on every kernel copy
+// this CPU runs; and no heap inside it.
+TEST(PickPlace, StepBatchGivesEveryWorldItsOwnStepsBits) {
+  PickPlaceWorld probe;
+  init_or_fail(probe, PickPlaceConfig());
+  if (probe.batch_lanes() == 0) GTEST_SKIP() << "double build: nothing is batched";
+  std::vector<unsigned char> mem(PickPlaceWorld::batch_scratch_bytes() + 64);
+  void* scratch = reinterpret_cast<void*>((reinterpret_cast<std::uintptr_t>(mem.data()) + 63) & ~std::uintptr_t(63));
+  for (batch::KernelCopy copy : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512}) {
+    if (!batch::use_kernel(copy)) continue;
+    SCOPED_TRACE(batch::kernel_name());
+    const int L = probe.batch_lanes();
+    std::vector<std::unique_ptr<PickPlaceWorld>> alone, batched;
+    std::vector<std::unique_ptr<ScriptedPickPlace>> script;
+    for (int l = 0; l < L; ++l) {
+      alone.push_back(std::make_unique<PickPlaceWorld>());
+      batched.push_back(std::make_unique<PickPlaceWorld>());
+      init_or_fail(*alone.back(), PickPlaceConfig(), 7, static_cast<std::uint32_t>(l));
+      init_or_fail(*batched.back(), PickPlaceConfig(), 7, static_cast<std::uint32_t>(l));
+      script.push_back(std::make_unique<ScriptedPickPlace>(*batched.back()));
+    }
+    std::mt19937 rng(11);
+    std::normal_distribution<float> noise(0.f, 0.25f);
+    std::vector<std::vector<real>> a(static_cast<std::size_t>(L), std::vector<real>(PickPlaceWorld::kJoints));
+    std::vector<PickPlaceWorld*> ptr(static_cast<std::size_t>(L));
+    std::vector<const real*> tgt(static_cast<std::size_t>(L));
+    std::vector<Status> status(static_cast<std::size_t>(L));
+    int batched_steps = 0, physics_steps = 0, contacts = 0;
+    std::uint64_t heap_allocations = 0;
+    for (int t = 0; t < 150; ++t) {
+      // World 3 sits the first 20 actions out (fewer worlds than lanes in those calls).
+      int n = 0;
+      for (int l = 0; l < L; ++l) {
+        if (l == 3 && t < 20) continue;
+        std::vector<real>& al = a[static_cast<std::size_t>(l)];
+        script[static_cast<std::size_t>(l)]->act(al.data());
+        if (l % 3 == 1)
+          for (real& v : al) v += noise(rng);
+        if (l == 5 && t == 40) al[2] = NAN;
+        ptr[static_cast<std::size_t>(n)] = batched[static_cast<std::size_t>(l)].get();
+        tgt[static_cast<std::size_t>(n)] = al.data();
+        ++n;
+      }
+      for (int l = 0; l < L; ++l) {
+        if (l == 3 && t < 20) continue;
+        ASSERT_EQ(alone[static_cast<std::size_t>(l)]->step(a[static_cast<std::size_t>(l)].data()), Status::ok);
+      }
+      {
+        kestrel::test::HeapCounter heap;
+        batched_steps += PickPlaceWorld::step_batch(ptr.data(), tgt.data(), n, status.data(), scratch);
+        heap_allocations += heap.allocations();
+      }
+      physics_steps += n * PickPlaceConfig().decimation;
+      for (int i = 0; i < n; ++i) ASSERT_EQ(status[static_cast<std::size_t>(i)], Status::ok);
+      for (int l = 0; l < L; ++l) {
+        const PickPlaceWorld& x = *alone[static_cast<std::size_t>(l)];
+        const PickPlaceWorld& y = *batched[static_cast<std::size_t>(l)];
+        ASSERT_EQ(x.state_hash(), y.state_hash()) << "world " << l << " action " << t;
+        ASSERT_EQ(x.contacts(), y.contacts()) << "world " << l << " action " << t;
+        ASSERT_EQ(x.grip_force_N(), y.grip_force_N()) << "world " << l << " action " << t;
+        for (int j = 0; j < PickPlaceWorld::kJoints; ++j) ASSERT_EQ(x.joint_targets()[j], y.joint_targets()[j]);
+        contacts += y.contacts();
+      }
+    }
+    EXPECT_EQ(heap_allocations, 0u);
+    EXPECT_GT(batched_steps, physics_steps * 3 / 4) << "the batch takes most physics steps";
+    EXPECT_GT(contacts, 150 * L * 3) << "the worlds touch the table, the cube and the box";
+    bool lifted = false;
+    for (int l = 0; l < L; l += 3) lifted = lifted || batched[static_cast<std::size_t>(l)]->state().cube_pos_w[2] > 0.05_r;
+    EXPECT_TRUE(lifted) << "a scripted world carries its cube: the grasp contacts are in the batch";
+  }
+  batch::use_default_kernel();
 }

@@ -146,7 +146,27 @@ class PickPlaceWorld {
   void set_box_position(const Vec3& p_w);
   std::uint64_t state_hash() const;
 
+  /// step() for several worlds at once: at each physics step their constrained steps go through
+  /// the batched articulated step, one world per SIMD lane (sim/src/backends/articulated_batch.hpp;
+  /// 16 lanes with AVX-512, 8 with AVX2, 4 otherwise), which gives every world the bits its own
+  /// step() gives it. A world the batch cannot take at a physics step (more than its 32 contacts)
+  /// takes the scalar step there. The worlds come from one PickPlaceConfig; count <= batch_lanes()
+  /// (else, or without scratch, they step one at a time); scratch: batch_scratch_bytes(), 64-byte
+  /// aligned, one per thread. status[i]: what step() returns. Returns the physics steps the batch
+  /// took (the rest were scalar).
+  static int step_batch(PickPlaceWorld* const* worlds, const real* const* joint_targets_rad, int count, Status* status, void* scratch);
+  /// Worlds step_batch() takes at once (0: none: the double build).
+  int batch_lanes() const;
+  static std::size_t batch_scratch_bytes();
+
  private:
+  static constexpr int kDofs = dynamics::max_dofs<kMaxRobotBodies>();
+  void set_targets(const real* joint_targets_rad);
+  // The servos' torques and, where unclipped, their implicit gains, per velocity coordinate.
+  void servo_torques(real* tau, real* kp, real* kd) const;
+  // The contacts at the poses in the solver's X_world, ascending keys; returns how many.
+  int collide();
+  void physics_step_done(int num_contacts);
   void refresh();
   void place_box(const Vec3& box_c);
   struct Impl;
@@ -163,6 +183,7 @@ class PickPlaceWorld {
   real grip_force_N_ = 0;
   int num_contacts_ = 0;
   int tcp_body_ = -1, pad_body_[2] = {-1, -1}, cube_body_ = -1;
+  bool batch_ok_ = false;  // the model's joints suit the batched step
 };
 
 /// LeIsaac-style scripted pick and place over PickPlaceWorld (the seed's demonstrations are
