@@ -695,3 +695,64 @@ KTEST(Contact, ARestingTreeConvergesInASweepOrTwoAndReusedPosesChangeNothing) {
   for (int k = 0; k < 11; ++k) KEXPECT_EQ(q2[k], q[k]);
   for (int k = 0; k < 10; ++k) KEXPECT_EQ(qd2[k], qd[k]);
 }
+
+// collide_halfspace skips a capsule or a box whose bounding sphere clears the plane by the margin
+// and 0.1 mm: random poses around that threshold, tilted planes, against the points computed by
+// hand (every capsule end and box corner, the same expressions): the same contacts, keys and gaps.
+KTEST(Contact, HalfSpaceCullLosesNoContact) {
+  RngStream rng(5, 0, 0);
+  int checked = 0, touching = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    dy::CollisionShape s;
+    s.body = 0;
+    const bool box = trial % 2 == 0;
+    s.type = box ? dy::ShapeType::box : dy::ShapeType::capsule;
+    s.size = box ? Vec3(rng.uniform(0.01_r, 0.2_r), rng.uniform(0.01_r, 0.2_r), rng.uniform(0.01_r, 0.2_r))
+                 : Vec3(rng.uniform(0.005_r, 0.05_r), rng.uniform(0.01_r, 0.2_r), 0);
+    s.p_b = Vec3(rng.uniform(-0.05_r, 0.05_r), rng.uniform(-0.05_r, 0.05_r), rng.uniform(-0.05_r, 0.05_r));
+    const Vec3 axis_b = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized();
+    s.R_b = Eigen::AngleAxis<real>(rng.uniform(-3, 3), axis_b).toRotationMatrix();
+    dy::HalfSpace g;
+    g.normal_w = Vec3(rng.uniform(-0.3_r, 0.3_r), rng.uniform(-0.3_r, 0.3_r), 1).normalized();
+    g.offset_m = rng.uniform(-0.1_r, 0.1_r);
+    dy::Transform X[1];
+    const Vec3 axis = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized();
+    X[0].E = Eigen::AngleAxis<real>(rng.uniform(-3, 3), axis).toRotationMatrix();
+    // The centre at the cull's threshold height above the plane, give or take 2 mm, or anywhere
+    // within the shape's reach.
+    const real margin = 0.01_r;
+    const real reach = box ? s.size.norm() : s.size[0] + s.size[1];
+    const real height = trial % 4 < 2 ? reach + margin + rng.uniform(-0.002_r, 0.002_r) : rng.uniform(-reach, reach + margin);
+    const Vec3 centre_w = g.normal_w * (g.offset_m + height);
+    X[0].r = centre_w - X[0].E.transpose() * s.p_b;
+    dy::ContactPoint c[16];
+    const int found = dy::collide_halfspace(&s, 1, X, g, margin, c, 16, 3);
+    // By hand: every point, no cull.
+    const Mat3 R_w = X[0].E.transpose() * s.R_b;
+    const Vec3 c_w = X[0].r + X[0].E.transpose() * s.p_b;
+    int want = 0;
+    for (int k = 0; k < (box ? 8 : 2); ++k) {
+      Vec3 p;
+      real gap;
+      if (box) {
+        p = c_w + R_w * Vec3((k & 1) ? s.size[0] : -s.size[0], (k & 2) ? s.size[1] : -s.size[1], (k & 4) ? s.size[2] : -s.size[2]);
+        gap = g.normal_w.dot(p) - g.offset_m;
+      } else {
+        const Vec3 end = c_w + R_w * Vec3(0, 0, real(2 * k - 1) * s.size[1]);
+        p = end - s.size[0] * g.normal_w;
+        gap = g.normal_w.dot(end) - g.offset_m - s.size[0];
+      }
+      if (!(gap < margin)) continue;
+      KASSERT_TRUE(want < found);
+      KEXPECT_EQ(c[want].key, 3 * 8 + k);
+      KEXPECT_EQ(c[want].separation_m, gap);
+      KEXPECT_EQ((c[want].point_w - p).norm(), real(0));
+      ++want;
+    }
+    KEXPECT_EQ(found, want);
+    ++checked;
+    touching += want > 0 ? 1 : 0;
+  }
+  KEXPECT_EQ(checked, 400);
+  KEXPECT_GT(touching, 100);  // the poses probe both sides of the threshold
+}

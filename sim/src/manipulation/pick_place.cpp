@@ -270,8 +270,7 @@ int PickPlaceWorld::collide() {
   // (collide_shapes) only where collide_shapes' own bounding-sphere test, the same expression on
   // the same centres, would not reject it, so the contacts are the ones it gives without this (a
   // standing arm's 15 shapes against the cube and the box's 5 parts, 90 pairs, ask for a few).
-  // Against the table: no shape whose bounding sphere is clear of it by the margin and 0.1 mm (no
-  // rounding of collide_halfspace's gaps comes near that).
+  // Against the table collide_halfspace culls by itself.
   const int ns = static_cast<int>(im.arm_shapes.size());
   Vec3 c_cube;
   Mat3 R_unused;
@@ -279,9 +278,6 @@ int PickPlaceWorld::collide() {
   for (int i = 0; i < ns; ++i) dy::shape_pose(im.arm_shapes[static_cast<std::size_t>(i)], X[im.arm_shapes[static_cast<std::size_t>(i)].body],
                                                im.arm_centre_w[static_cast<std::size_t>(i)], R_unused);
   auto near = [&](const Vec3& ca, real ra, const Vec3& cb, real rb) { return !((ca - cb).norm() > ra + rb + kContactMargin_m); };
-  auto near_table = [&](const Vec3& c, real r) {
-    return !(im.table.normal_w.dot(c) - im.table.offset_m - r > kContactMargin_m + 1e-4_r);
-  };
   // Pair kinds in the order of their key ranges, each kind's pairs in ascending keys, so the list
   // ascends (what the batched step needs to match contacts across worlds; the scalar step takes
   // the same list, so both give the same bits).
@@ -291,20 +287,17 @@ int PickPlaceWorld::collide() {
     if (near(im.arm_centre_w[si], im.arm_radius[si], c_cube, im.cube_radius))
       take(dy::collide_shapes(s, X[s.body], im.cube, X[cube_body_], kContactMargin_m, im.contacts + n, room(), kKeyArmCube + 16 * i));
   }
-  for (int i = 0; i < ns; ++i) {
-    const std::size_t si = static_cast<std::size_t>(i);
-    if (near_table(im.arm_centre_w[si], im.arm_radius[si]))
-      take(dy::collide_halfspace(&im.arm_shapes[si], 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyArmTable / 8 + i));
-  }
-  if (near_table(c_cube, im.cube_radius))
-    take(dy::collide_halfspace(&im.cube, 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyCubeTable / 8));
+  for (int i = 0; i < ns; ++i)
+    take(dy::collide_halfspace(&im.arm_shapes[static_cast<std::size_t>(i)], 1, X, im.table, kContactMargin_m, im.contacts + n, room(),
+                               kKeyArmTable / 8 + i));
+  take(dy::collide_halfspace(&im.cube, 1, X, im.table, kContactMargin_m, im.contacts + n, room(), kKeyCubeTable / 8));
   for (int p = 0; p < kBoxParts; ++p)
     if (near(c_cube, im.cube_radius, im.box[p].p_b, im.box_radius[p]))
       take(dy::collide_shapes(im.cube, X[cube_body_], im.box[p], world, kContactMargin_m, im.contacts + n, room(), kKeyCubeBox + 16 * p));
   for (int i = 0; i < ns; ++i) {
     const std::size_t si = static_cast<std::size_t>(i);
     const dy::CollisionShape& s = im.arm_shapes[si];
-    // The whole box far (its sphere holds every part's; 0.1 mm for rounding, as near_table).
+    // The whole box far (its sphere holds every part's; 0.1 mm for rounding).
     if ((im.arm_centre_w[si] - im.box_centre_w).norm() > im.arm_radius[si] + im.box_all_radius + kContactMargin_m + 1e-4_r) continue;
     for (int p = 0; p < kBoxParts; ++p)
       if (near(im.arm_centre_w[si], im.arm_radius[si], im.box[p].p_b, im.box_radius[p]))
