@@ -400,7 +400,15 @@ int PickPlaceWorld::step_batch(PickPlaceWorld* const* worlds, const real* const*
       ln.warm = &w.impl_->warm;
       ln.contact_force_w = w.impl_->cd.contact_force_w;
     }
-    const unsigned done = legged_batch::step(m, batch_params, dt, lanes, cnt, scratch);
+    unsigned done = legged_batch::step(m, batch_params, dt, lanes, cnt, scratch);
+    if (done == 0 && cnt >= 2 && 3 * (cnt / 2) >= width) {
+      // Most likely the worlds' contacts together need more slots than the batch has (arms on the
+      // table, the box and the cube at once): each half alone, its kinematics computed afresh (the
+      // scratch's are the whole call's).
+      const int h = cnt / 2;
+      done = legged_batch::step(m, alone, dt, lanes, h, scratch);
+      done |= legged_batch::step(m, alone, dt, lanes + h, cnt - h, scratch) << h;
+    }
     for (int l = 0; l < cnt; ++l) {
       PickPlaceWorld& w = *live[l];
       Impl& im = *w.impl_;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -73,7 +74,11 @@ class PickPlaceSimulator final : public Simulator {
     episode_step_.assign(n, 0);
     const int threads = std::max(1, std::min(c.num_threads, num_envs_));
     pool_ = std::make_unique<ThreadPool>(threads);
-    lanes_ = std::min(w0.batch_lanes(), 64);
+    // KESTREL_LEGGED_BATCH=off steps every world alone, as it keeps the legged robots on the
+    // scalar step (the same bits; for A/B runs).
+    const char* batch_env = std::getenv("KESTREL_LEGGED_BATCH");
+    const bool batch_off = batch_env != nullptr && std::strcmp(batch_env, "off") == 0;
+    lanes_ = batch_off ? 0 : std::min(w0.batch_lanes(), 64);
     if (lanes_ > 0)  // one batch scratch per worker, 64-byte aligned (operator new of an aligned type)
       for (int t = 0; t < threads; ++t)
         scratch_.push_back(std::unique_ptr<Line[]>(new Line[(PickPlaceWorld::batch_scratch_bytes() + sizeof(Line) - 1) / sizeof(Line)]));

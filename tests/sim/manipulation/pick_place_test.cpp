@@ -271,7 +271,8 @@ TEST(PickPlace, StepBatchGivesEveryWorldItsOwnStepsBits) {
       EXPECT_EQ(alone[0]->state_hash(), batched[0]->state_hash());
     }
     EXPECT_EQ(heap_allocations, 0u);
-    EXPECT_GT(batched_steps, physics_steps * 3 / 4) << "the batch takes most physics steps";
+    // 98.8 % with 16 lanes (84 % before a call whose contacts overflow the slots retried by halves).
+    EXPECT_GT(batched_steps, physics_steps * 95 / 100) << "the batch takes nearly every physics step";
     EXPECT_GT(contacts, 150 * L * 3) << "the worlds touch the table, the cube and the box";
     bool lifted = false;
     for (int l = 0; l < L; l += 3) lifted = lifted || batched[static_cast<std::size_t>(l)]->state().cube_pos_w[2] > 0.05_r;

@@ -150,7 +150,8 @@ class PickPlaceWorld {
   /// the batched articulated step, one world per SIMD lane (sim/src/backends/articulated_batch.hpp;
   /// 16 lanes with AVX-512, 8 with AVX2, 4 otherwise), which gives every world the bits its own
   /// step() gives it. A world the batch cannot take at a physics step (more than its 32 contacts)
-  /// takes the scalar step there. The worlds come from one PickPlaceConfig; count <= batch_lanes()
+  /// takes the scalar step there; worlds whose contacts together overflow the batch's 32 slots
+  /// go as two halves. The worlds come from one PickPlaceConfig; count <= batch_lanes()
   /// (else, with fewer than a third of the lanes, where that is faster, or without scratch, they
   /// step one at a time); scratch: batch_scratch_bytes(), 64-byte
   /// aligned, one per thread. status[i]: what step() returns. Returns the physics steps the batch
