@@ -962,6 +962,7 @@ NB_MODULE(_core, m) {
             d["cube_quat_xyzw"] = std::vector<double>{st.cube_quat_xyzw[0], st.cube_quat_xyzw[1], st.cube_quat_xyzw[2], st.cube_quat_xyzw[3]};
             d["box_pos_w"] = v3(st.box_pos_w);
             d["grip_force_N"] = static_cast<double>(w->grip_force_N());
+            d["contacts"] = w->contacts();  // the last physics step's contact points
             d["cube_in_box"] = w->cube_in_box();
             d["joint_pos"] = std::vector<double>(w->joint_pos(), w->joint_pos() + ks::PickPlaceWorld::kJoints);
             d["joint_targets"] = std::vector<double>(w->joint_targets(), w->joint_targets() + ks::PickPlaceWorld::kJoints);
