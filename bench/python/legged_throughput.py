@@ -13,26 +13,14 @@ Writes bench/results/python/legged_throughput.csv.
 Usage: .venv/bin/python bench/python/legged_throughput.py [--envs 4096] [--steps 100]
 """
 import argparse
-import csv
 import os
-import platform
 import time
 
 import numpy as np
 
 import kestrel
+from bench_rows import cpu_model, write_rows
 from kestrel.progress import Progress
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def main():
@@ -78,12 +66,7 @@ def main():
         env.close()
     os.environ.pop("KESTREL_LEGGED_BATCH", None)
     progress.close()
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    print("wrote", os.path.abspath(args.out))
+    write_rows(args.out, rows)
 
 
 if __name__ == "__main__":

@@ -12,27 +12,15 @@ Writes bench/results/python/pick_place_throughput.csv.
 Usage: .venv/bin/python bench/python/pick_place_throughput.py [--envs 1024] [--steps 50] [--repeats 3] [--noise 0.3 1.0]
 """
 import argparse
-import csv
 import os
-import platform
 import time
 
 import numpy as np
 
 import kestrel
+from bench_rows import cpu_model, write_rows
 
 ID = "Kestrel-SO101-PickPlace-v0"
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def run(envs, steps, threads, step, noise):
@@ -88,12 +76,7 @@ def main():
             if not same:
                 raise SystemExit(f"pick_place_throughput: the batched and the alone runs differ: {hashes}")
     os.environ.pop("KESTREL_LEGGED_BATCH", None)
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    print("wrote", os.path.abspath(args.out))
+    write_rows(args.out, rows)
 
 
 if __name__ == "__main__":
