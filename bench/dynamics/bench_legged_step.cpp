@@ -54,6 +54,7 @@
 
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/dynamics/multibody.hpp"
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/progress.hpp"
 #include "backends/articulated_batch.hpp"
@@ -239,7 +240,7 @@ struct KestrelBatchSide {
   std::vector<std::unique_ptr<KestrelSide>> robots;
   std::vector<std::vector<dy::ContactPoint>> contacts;
   std::vector<std::vector<kestrel::Vec3>> forces;
-  std::vector<unsigned char> scratch;
+  ks::AlignedScratch scratch;
   void* mem = nullptr;
 
   void init(const KestrelSide& k, int lanes) {
@@ -247,8 +248,8 @@ struct KestrelBatchSide {
     for (int l = 0; l < lanes; ++l) robots.push_back(std::make_unique<KestrelSide>(k));
     contacts.assign(static_cast<std::size_t>(lanes), std::vector<dy::ContactPoint>(kMaxContacts));
     forces.assign(static_cast<std::size_t>(lanes), std::vector<kestrel::Vec3>(kMaxContacts));
-    scratch.assign(ks::legged_batch::scratch_bytes() + 64, 0);
-    mem = scratch.data() + (64 - reinterpret_cast<std::uintptr_t>(scratch.data()) % 64) % 64;
+    scratch.resize(ks::legged_batch::scratch_bytes());
+    mem = scratch.data();
   }
   // True when every robot was stepped.
   bool step() {

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/pick_place.hpp"
 
 using namespace kestrel;
@@ -94,8 +95,8 @@ int main(int argc, char** argv) {
     double lifted = 0, slip = 0, drift = 0, cx = 0, cy = 0, bx = 0, by = 0;
   };
   std::vector<Row> rows(static_cast<std::size_t>(std::max(episodes, 0)));
-  std::vector<unsigned char> scratch_mem(PickPlaceWorld::batch_scratch_bytes() + 64);
-  void* scratch = reinterpret_cast<void*>((reinterpret_cast<std::uintptr_t>(scratch_mem.data()) + 63) & ~std::uintptr_t(63));
+  AlignedScratch scratch_mem(PickPlaceWorld::batch_scratch_bytes());
+  void* scratch = scratch_mem.data();
 
   int next_episode = 0;
   auto start = [&](Slot& s) {

@@ -32,6 +32,7 @@
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/collision.hpp"
 #include "kestrel/sim/simulator.hpp"
@@ -72,10 +73,7 @@ struct Group {
 struct Worker {
   // The batched step's per-robot arrays and its scratch (set up when the batch is used).
   std::unique_ptr<Group> group;
-  struct alignas(64) Block {
-    unsigned char b[64];
-  };
-  std::vector<Block> batch_mem;
+  AlignedScratch batch_mem;
   void* batch_scratch() { return batch_mem.data(); }
   // The robot's model with one environment's randomised root-body inertia and joint armatures
   // written in before its physics step (only when those are randomised): one copy per worker, so
@@ -258,7 +256,7 @@ class ArticulatedSimulator final : public Simulator {
     if (batch_lanes_ > 1)
       for (auto& w : workers_) {
         w->group = std::make_unique<Group>();
-        w->batch_mem.resize((legged_batch::scratch_bytes() + 63) / 64);
+        w->batch_mem.resize(legged_batch::scratch_bytes());
       }
     for (int e = 0; e < num_envs_; ++e) reset_env(e, false);
     for (int e = 0; e < num_envs_; ++e) refresh(e, *workers_[0]);

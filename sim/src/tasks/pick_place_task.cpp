@@ -10,6 +10,7 @@
 
 #include "kestrel/kernel/math.hpp"
 #include "kestrel/kernel/quaternion.hpp"
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/schema.hpp"
 #include "kestrel/sim/state_hash.hpp"
 #include "kestrel/sim/summary.hpp"
@@ -79,9 +80,8 @@ class PickPlaceSimulator final : public Simulator {
     const char* batch_env = std::getenv("KESTREL_LEGGED_BATCH");
     const bool batch_off = batch_env != nullptr && std::strcmp(batch_env, "off") == 0;
     lanes_ = batch_off ? 0 : std::min(w0.batch_lanes(), 64);
-    if (lanes_ > 0)  // one batch scratch per worker, 64-byte aligned (operator new of an aligned type)
-      for (int t = 0; t < threads; ++t)
-        scratch_.push_back(std::unique_ptr<Line[]>(new Line[(PickPlaceWorld::batch_scratch_bytes() + sizeof(Line) - 1) / sizeof(Line)]));
+    if (lanes_ > 0)  // one batch scratch per worker
+      scratch_.assign(static_cast<std::size_t>(threads), AlignedScratch(PickPlaceWorld::batch_scratch_bytes()));
     for (int e = 0; e < num_envs_; ++e) refresh(e);
     return true;
   }
@@ -196,7 +196,7 @@ class PickPlaceSimulator final : public Simulator {
     PickPlaceSimulator& self = *static_cast<PickPlaceSimulator*>(job.ctx);
     const int begin = static_cast<int>(static_cast<long long>(job.n) * worker / job.threads);
     const int end = static_cast<int>(static_cast<long long>(job.n) * (worker + 1) / job.threads);
-    void* scratch = self.scratch_[static_cast<std::size_t>(worker)].get();
+    void* scratch = self.scratch_[static_cast<std::size_t>(worker)].data();
     PickPlaceWorld* worlds[64];
     const real* targets[64];
     Status status[64];
@@ -246,11 +246,8 @@ class PickPlaceSimulator final : public Simulator {
 
   std::vector<std::unique_ptr<PickPlaceWorld>> worlds_;
   std::unique_ptr<ThreadPool> pool_;
-  struct alignas(64) Line {
-    unsigned char b[64];
-  };
   int lanes_ = 0;  // worlds per step_batch call (0: one at a time)
-  std::vector<std::unique_ptr<Line[]>> scratch_;
+  std::vector<AlignedScratch> scratch_;
   std::vector<EnvStats> stats_;
   std::vector<std::uint64_t> step_errors_;
   std::vector<int> episode_step_;

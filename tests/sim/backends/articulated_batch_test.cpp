@@ -17,6 +17,7 @@
 #include "backends/articulated_batch.hpp"
 #include "kestrel/dynamics/contact.hpp"
 #include "kestrel/kernel/rng.hpp"
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/articulated_robot.hpp"
 #include "kestrel/sim/batch_step.hpp"
 
@@ -172,8 +173,8 @@ unsigned compare_batch(const ArticulatedRobot& ar, std::uint64_t seed, int count
     ln.warm = &r.warm;
     ln.contact_force_w = r.force;
   }
-  std::vector<unsigned char> scratch(lb::scratch_bytes() + 64);
-  void* mem = scratch.data() + (64 - reinterpret_cast<std::uintptr_t>(scratch.data()) % 64) % 64;
+  AlignedScratch scratch(lb::scratch_bytes());
+  void* mem = scratch.data();
   const unsigned done = lb::step(m, p, dt, lanes.data(), count, mem);
   EXPECT_EQ(done, scalar_ok) << "the batch takes exactly the lanes the scalar step takes";
   for (int l = 0; l < count; ++l) {

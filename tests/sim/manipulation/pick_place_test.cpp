@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "heap_counter.hpp"
+#include "kestrel/sim/aligned_scratch.hpp"
 #include "kestrel/sim/batch_step.hpp"
 #include "kestrel/sim/pick_place.hpp"
 
@@ -203,8 +204,8 @@ TEST(PickPlace, StepBatchGivesEveryWorldItsOwnStepsBits) {
   PickPlaceWorld probe;
   init_or_fail(probe, PickPlaceConfig());
   if (probe.batch_lanes() == 0) GTEST_SKIP() << "double build: nothing is batched";
-  std::vector<unsigned char> mem(PickPlaceWorld::batch_scratch_bytes() + 64);
-  void* scratch = reinterpret_cast<void*>((reinterpret_cast<std::uintptr_t>(mem.data()) + 63) & ~std::uintptr_t(63));
+  AlignedScratch mem(PickPlaceWorld::batch_scratch_bytes());
+  void* scratch = mem.data();
   for (batch::KernelCopy copy : {batch::KernelCopy::baseline, batch::KernelCopy::avx2, batch::KernelCopy::avx512}) {
     if (!batch::use_kernel(copy)) continue;
     SCOPED_TRACE(batch::kernel_name());

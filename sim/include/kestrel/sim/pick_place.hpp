@@ -150,12 +150,12 @@ class PickPlaceWorld {
   /// the batched articulated step, one world per SIMD lane (sim/src/backends/articulated_batch.hpp;
   /// 16 lanes with AVX-512, 8 with AVX2, 4 otherwise), which gives every world the bits its own
   /// step() gives it. A world the batch cannot take at a physics step (more than its 32 contacts)
-  /// takes the scalar step there; worlds whose contacts together overflow the batch's 32 slots
-  /// go as two halves. The worlds come from one PickPlaceConfig; count <= batch_lanes()
-  /// (else, with fewer than a third of the lanes, where that is faster, or without scratch, they
-  /// step one at a time); scratch: batch_scratch_bytes(), 64-byte
-  /// aligned, one per thread. status[i]: what step() returns. Returns the physics steps the batch
-  /// took (the rest were scalar).
+  /// takes the scalar step there; worlds whose contacts together overflow the batch's 32 slots go
+  /// as two halves. The worlds come from one PickPlaceConfig. They step one at a time where
+  /// count > batch_lanes(), where count is under a third of the lanes (faster so: a batch does its
+  /// whole width's work) or without scratch. scratch: batch_scratch_bytes() (AlignedScratch), one
+  /// per thread. status[i]: what step() returns. Returns the physics steps the batch took (the
+  /// rest were scalar).
   static int step_batch(PickPlaceWorld* const* worlds, const real* const* joint_targets_rad, int count, Status* status, void* scratch);
   /// Worlds step_batch() takes at once (0: none: the double build).
   int batch_lanes() const;
